@@ -1,0 +1,7 @@
+#include "cli.hpp"
+
+namespace ema {
+
+int RunModel(const std::vector<std::string>& /*args*/) { return cli::NotBuiltYet("model", "issue 6"); }
+
+}  // namespace ema

@@ -1,0 +1,154 @@
+// Vocabulary types shared by every ema module. Plain value types, no I/O.
+//
+// Conventions (see docs/conventions.md and shared spec algorithms.md §0):
+//  * time dependence e^{+jwt}; DFT X_k = sum x_n e^{-j 2 pi k n / N} (the FFTW sign);
+//  * poles lambda = -zeta*w + j*w*sqrt(1-zeta^2) in rad/s, Im > 0 for the stored member of a pair;
+//  * directions use the UFF direction codes: 1,2,3 = +X,+Y,+Z; 4,5,6 = +RX,+RY,+RZ;
+//    negative = the opposite sense; 0 = scalar (no direction).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace ema {
+
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+inline constexpr double kTwoPi = 6.283185307179586476925286766559;
+
+/// A measurement degree of freedom: a node id and a signed UFF direction code.
+struct Dof {
+  int node = 0;
+  int direction = 0;  ///< UFF code: ±1..±3 translations X,Y,Z; ±4..±6 rotations; 0 scalar
+
+  friend bool operator==(const Dof&, const Dof&) = default;
+  friend auto operator<=>(const Dof&, const Dof&) = default;
+};
+
+/// "+X", "-Z", "+RY", "S" (scalar) for a UFF direction code.
+inline std::string DirectionName(int code) {
+  static const char* kAxis[] = {"X", "Y", "Z", "RX", "RY", "RZ"};
+  if (code == 0) return "S";
+  const int a = code < 0 ? -code : code;
+  if (a > 6) return "?" + std::to_string(code);
+  return std::string(code < 0 ? "-" : "+") + kAxis[a - 1];
+}
+
+/// Parses "+X", "X", "-z", "+RY" (case-insensitive) into a UFF direction code; 0 if unknown.
+inline int ParseDirection(std::string_view text) {
+  int sign = 1;
+  if (!text.empty() && (text.front() == '+' || text.front() == '-')) {
+    sign = text.front() == '-' ? -1 : 1;
+    text.remove_prefix(1);
+  }
+  std::string up;
+  for (char c : text) up += static_cast<char>(c >= 'a' && c <= 'z' ? c - 32 : c);
+  static const char* kAxis[] = {"X", "Y", "Z", "RX", "RY", "RZ"};
+  for (int i = 0; i < 6; ++i)
+    if (up == kAxis[i]) return sign * (i + 1);
+  return 0;
+}
+
+inline std::string DofName(const Dof& dof) { return std::to_string(dof.node) + DirectionName(dof.direction); }
+
+/// Physical quantity of a channel. Values are the UFF 58 "specific data type" codes.
+enum class Quantity : int {
+  kUnknown = 0,
+  kDisplacement = 8,
+  kVelocity = 11,
+  kAcceleration = 12,
+  kForce = 13,
+};
+
+/// Kind of FRF by its response quantity (pyEMA: frf_type).
+enum class FrfType { kReceptance, kMobility, kAccelerance };
+
+inline FrfType FrfTypeOf(Quantity response) {
+  switch (response) {
+    case Quantity::kDisplacement: return FrfType::kReceptance;
+    case Quantity::kVelocity: return FrfType::kMobility;
+    default: return FrfType::kAccelerance;
+  }
+}
+
+/// One sampled channel of one impact, as acquired (a UFF 58 function-type-1 record or a CSV column).
+struct TimeRecord {
+  Dof channel;                 ///< where the sensor (or, for the force record, the hammer) is
+  Dof reference;               ///< the hammer point of this impact
+  int impact = 0;              ///< impact number within its point (UFF: load case id)
+  Quantity quantity = Quantity::kUnknown;
+  double sample_interval_s = 0.0;
+  double start_time_s = 0.0;
+  std::vector<double> samples;
+  double full_scale = kNaN;    ///< ADC / channel range in the samples' unit, if known
+  std::string unit;            ///< unit label as read, e.g. "N", "m/s^2", "g"
+  std::string origin;          ///< "file.unv, dataset 58 #12 (line 345)" for error messages
+};
+
+/// FRFs of one test on a uniform frequency grid, with the reference(s) as columns of H.
+/// Orientation: h[r] is n_lines × n_outputs, the FRFs from reference r to every output
+/// (column-major Eigen favours per-FRF work along the frequency axis).
+struct FrfSet {
+  Eigen::VectorXd frequency_hz;        ///< n_lines, uniformly spaced
+  std::vector<Dof> outputs;            ///< response DOFs (rows of H)
+  std::vector<Dof> references;         ///< reference DOFs (columns of H)
+  std::vector<Eigen::MatrixXcd> h;     ///< per reference: n_lines × n_outputs; NaN where not measured
+  std::vector<Eigen::MatrixXd> coherence;  ///< same shape as h; empty when unknown
+  Eigen::MatrixXi averages;            ///< n_references × n_outputs accepted impacts; empty if unknown
+  Quantity output_quantity = Quantity::kAcceleration;  ///< accelerance by default
+  double window_decay_rate = 0.0;      ///< 1/tau [1/s] of an exponential window the FRFs carry
+  bool roving_hammer = false;          ///< rows measured by a moving hammer, fixed sensors (reciprocity)
+  std::string force_unit = "N";
+  std::string response_unit = "m/s^2";
+
+  int LineCount() const { return static_cast<int>(frequency_hz.size()); }
+  int OutputCount() const { return static_cast<int>(outputs.size()); }
+  int ReferenceCount() const { return static_cast<int>(references.size()); }
+};
+
+/// A node of the test or model geometry (global coordinates, metres).
+struct Node {
+  int id = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+};
+
+/// One mode: pole, shape at ModeSet::dofs, quality indicators.
+struct Mode {
+  double frequency_hz = 0.0;           ///< undamped natural frequency |lambda|/2pi
+  double damping_ratio = 0.0;          ///< -Re(lambda)/|lambda|
+  std::complex<double> pole{0.0, 0.0}; ///< rad/s, Im > 0
+  Eigen::VectorXcd shape;              ///< aligned with ModeSet::dofs
+  Eigen::VectorXcd participation;      ///< per reference (empty for model modes)
+  double mpc = kNaN;                   ///< modal phase collinearity, 0..1
+  double mpd = kNaN;                   ///< mean phase deviation, degrees
+  double frequency_spread_hz = kNaN;   ///< std. dev. of the stable-pole cluster
+  double damping_spread = kNaN;        ///< std. dev. of the cluster's damping ratio
+  bool unit_modal_mass = false;        ///< shape scaled to unit modal mass
+};
+
+/// A set of modes with the DOFs their shapes are given at.
+struct ModeSet {
+  std::vector<Dof> dofs;
+  std::vector<Mode> modes;
+  std::vector<Node> geometry;          ///< test/model geometry when known (may be empty)
+  std::string source;                  ///< where the set came from, for messages and reports
+};
+
+/// Pole (rad/s) to undamped natural frequency (Hz) and damping ratio.
+inline void PoleToFrequencyAndDamping(std::complex<double> pole, double* frequency_hz, double* damping_ratio) {
+  const double w = std::abs(pole);
+  *frequency_hz = w / kTwoPi;
+  *damping_ratio = w > 0.0 ? -pole.real() / w : 0.0;
+}
+
+/// Natural frequency (Hz) and damping ratio to the pole with Im > 0 (rad/s).
+inline std::complex<double> FrequencyAndDampingToPole(double frequency_hz, double damping_ratio) {
+  const double w = kTwoPi * frequency_hz;
+  return {-damping_ratio * w, w * std::sqrt(std::max(0.0, 1.0 - damping_ratio * damping_ratio))};
+}
+
+}  // namespace ema

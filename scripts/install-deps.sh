@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs the Debian packages ema needs, only when one is missing. Usage: scripts/install-deps.sh [--test]
+# --test adds what the test suite needs beyond the build (headless Chromium for the report check).
+set -euo pipefail
+packages=(build-essential cmake pkg-config libeigen3-dev libfftw3-dev libceres-dev
+          libboost-program-options-dev libgtest-dev libgmock-dev libtomlplusplus-dev
+          nlohmann-json3-dev libspectra-dev libbenchmark-dev nodejs npm)
+if [[ "${1:-}" == "--test" ]]; then
+  packages+=(chromium clang)
+fi
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+# nodejs/npm may come from outside Debian's packages (a preinstalled node): accept a working npm.
+if command -v npm >/dev/null 2>&1; then
+  missing=("${missing[@]/nodejs}"); missing=("${missing[@]/npm}")
+fi
+read -r -a missing <<< "${missing[*]:-}"
+if ((${#missing[@]})); then
+  echo "ema: installing missing packages: ${missing[*]}" >&2
+  sudo=""
+  [[ $(id -u) -ne 0 ]] && sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+fi

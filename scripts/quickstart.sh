@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# From a fresh clone to results. Usage:
+#   scripts/quickstart.sh          install what is missing, build, run the main job on the sample
+#   scripts/quickstart.sh --test   install what is missing, build, run the whole test suite
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mode="${1:-}"
+bash scripts/install-deps.sh ${mode}
+jobs=$(nproc 2>/dev/null || echo 2)
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"${jobs}"
+if [[ "${mode}" == "--test" ]]; then
+  ctest --test-dir build --output-on-failure -j"${jobs}" --timeout 900
+else
+  bash scripts/main-job.sh
+fi

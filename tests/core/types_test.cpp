@@ -1,0 +1,28 @@
+#include "ema/core/types.hpp"
+
+#include <gtest/gtest.h>
+
+namespace ema {
+namespace {
+
+TEST(Direction, NamesRoundTrip) {
+  for (int code : {1, 2, 3, 4, 5, 6, -1, -2, -3, -4, -5, -6}) {
+    EXPECT_EQ(ParseDirection(DirectionName(code)), code) << DirectionName(code);
+  }
+  EXPECT_EQ(DirectionName(-3), "-Z");
+  EXPECT_EQ(ParseDirection("x"), 1);
+  EXPECT_EQ(ParseDirection("+Q"), 0);
+}
+
+TEST(Pole, FrequencyAndDampingRoundTrip) {
+  // 1e-12: the conversion is a handful of floating-point operations.
+  for (double zeta : {0.0, 0.001, 0.05, 0.3}) {
+    double f = 0.0, z = 0.0;
+    PoleToFrequencyAndDamping(FrequencyAndDampingToPole(123.4, zeta), &f, &z);
+    EXPECT_NEAR(f, 123.4, 1e-9);
+    EXPECT_NEAR(z, zeta, 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace ema
