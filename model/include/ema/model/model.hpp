@@ -1,0 +1,195 @@
+// The spatial model of a test article as plain value types (model-format.md). No file I/O here:
+// ema/formats/model_file.hpp reads and writes these from/to the TOML model file.
+//
+// Units are SI throughout (m, kg, N, s, Pa, rad). Forces of interface laws are positive in
+// compression; a law's deflection d is its compression.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <map>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace ema::model {
+
+/// Reserved body name: fixed, no DOF.
+inline constexpr const char* kGround = "ground";
+
+struct Law;
+
+/// F = k d.
+struct LinearLaw {
+  double k = 0.0;  ///< N/m (N m/rad for rotational springs)
+};
+
+/// Monotone force-deflection table, interpolated with a monotone cubic (Fritsch-Carlson).
+/// The operating point is given by deflection or by force (exactly one; deflection wins).
+struct TableLaw {
+  std::vector<double> deflection;  ///< strictly increasing
+  std::vector<double> force;       ///< strictly increasing with deflection
+  std::optional<double> operating_deflection;
+  std::optional<double> operating_force;
+};
+
+/// Air-film load-lift curve W(h): load decreasing with gap. Stiffness is -dW/dh at the gap.
+struct AirFilmLaw {
+  std::vector<double> gap;   ///< strictly increasing, m
+  std::vector<double> load;  ///< strictly decreasing, N
+  double operating_gap = 0.0;  ///< used when the law stands alone (not inside a chain)
+};
+
+/// Hertz contact F = 4/3 E' sqrt(R') (d - offset)^1.5, k = 2 E' sqrt(R' (d - offset)).
+/// Operating point: compression `deflection` or `force` (preload); inside a chain the chain's
+/// force sets it.
+struct HertzLaw {
+  double modulus = 0.0;  ///< effective modulus E', Pa
+  double radius = 0.0;   ///< effective radius R', m
+  double offset = 0.0;   ///< free play before contact, m
+  std::optional<double> operating_deflection;
+  std::optional<double> operating_force;
+};
+
+/// A chain of elements carrying one force. With an air film in the chain, the operating point is
+/// solved from `setting`: W(h) = F_i(d_i) for all i and h = setting + sum d_i. Without an air
+/// film the chain carries `force` (default 0: each element at zero load, or at its own operating
+/// point when that is given).
+struct SeriesLaw {
+  std::vector<Law> elements;
+  double setting = 0.0;           ///< m, lift measured at the outer end of the chain
+  std::optional<double> force;    ///< N, chain force when there is no air film
+};
+
+/// One interface law (the variant of every law kind of model-format.md).
+struct Law {
+  std::variant<LinearLaw, TableLaw, AirFilmLaw, HertzLaw, SeriesLaw> value;
+
+  Law() = default;
+  template <typename T>
+  Law(T law) : value(std::move(law)) {}  // NOLINT: implicit on purpose (Law l = LinearLaw{k})
+
+  /// "linear", "table", "air_film", "hertz", "series".
+  std::string KindName() const;
+  /// True for every law whose stiffness depends on an operating point (all but linear, and a
+  /// series chain only when one of its elements is non-linear).
+  bool IsNonlinear() const;
+};
+
+/// Rigid body, 6 DOF (ux uy uz rx ry rz) at its centre of mass.
+struct Body {
+  std::string name;
+  double mass = 0.0;                                  ///< kg
+  Eigen::Vector3d inertia = Eigen::Vector3d::Zero();  ///< Ixx Iyy Izz about the centre, kg m^2
+  /// Products of inertia Ixy Iyz Ixz = integral of x y dm etc.; the inertia tensor holds -Ixy.
+  Eigen::Vector3d products = Eigen::Vector3d::Zero();
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();   ///< m, global
+  int line = 0;                                       ///< source line, 0 if built in code
+};
+
+/// Where a spring end, point mass or test point sits: on a body at a global position, or at an
+/// FE node (node > 0).
+struct Anchor {
+  std::string body;                               ///< body name ("ground" allowed); empty for FE node
+  int node = 0;                                   ///< FE node id, > 0 when anchored to a node
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();   ///< m, global position (bodies)
+  bool has_at = false;                            ///< false: at defaults (body centre / end a)
+
+  bool IsNode() const { return node > 0; }
+  bool IsGround() const { return node <= 0 && body == kGround; }
+};
+
+/// Point mass fixed to a body or an FE node (a sensor, a payload).
+struct PointMass {
+  std::string name;
+  Anchor where;
+  double mass = 0.0;  ///< kg
+  int line = 0;
+};
+
+/// Spring between end a and end b along (translational) or about (rotational) `direction`.
+struct Spring {
+  enum class Kind { kTranslational, kRotational };
+  std::string name;
+  std::string group;  ///< physical kind of interface; diagnosis works on groups
+  Kind kind = Kind::kTranslational;
+  Anchor a;
+  Anchor b;           ///< b.at defaults to a.at
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  ///< normalised when solved
+  Law law;
+  double stiffness_factor = 1.0;  ///< multiplies the linearised stiffness (stiffness_scale effect)
+  int line = 0;
+};
+
+/// Modal damping: one ratio for every mode, or per elastic mode in frequency order (the last
+/// value repeats for modes beyond the list).
+struct Damping {
+  double ratio = 0.0;
+  std::vector<double> ratios;
+  double RatioOfMode(int elastic_mode_index) const;
+};
+
+/// A test point: ties a UFF node id of a test to a place on the model.
+struct TestPoint {
+  int id = 0;
+  Anchor where;
+  int line = 0;
+};
+
+/// One test configuration: operating values by spring group (series: setting; air_film: gap;
+/// table/hertz: deflection, or force when the law's operating point is a force).
+struct Setup {
+  std::string name;
+  std::map<std::string, double> operating;
+  int line = 0;
+};
+
+/// An effect of the vocabulary (model-format.md): kind, target, parameters and optional law.
+/// Kinds: series_compliance, stiffness_scale, operating_point, added_mass, mass_scale,
+/// ground_spring.
+struct Effect {
+  std::string kind;
+  std::string target;
+  std::map<std::string, double> parameters;  ///< factor, value, mass, k (per kind)
+  std::optional<Law> law;                     ///< series_compliance
+  int line = 0;
+};
+
+/// Imported finite-element matrices (symmetric; lower or full storage accepted).
+struct FeMatrices {
+  Eigen::SparseMatrix<double> mass;
+  Eigen::SparseMatrix<double> stiffness;
+  struct DofEntry {
+    int node = 0;
+    int dof = 0;  ///< 1..6 = ux uy uz rx ry rz
+  };
+  std::vector<DofEntry> dofs;                      ///< one per matrix row
+  std::map<int, Eigen::Vector3d> node_positions;   ///< node id -> global position, m
+  std::string origin;                              ///< file names, for messages
+
+  bool Empty() const { return dofs.empty(); }
+};
+
+/// The whole spatial model.
+struct Model {
+  std::string name;
+  std::vector<Body> bodies;
+  std::vector<PointMass> masses;
+  std::vector<Spring> springs;
+  Damping damping;
+  std::vector<TestPoint> points;
+  std::vector<Setup> setups;
+  /// Effects not yet applied. ApplyEffects() applies and clears them; Solve() applies any that
+  /// are still pending, so a model read from a file is always solved with its [[effect]] blocks.
+  std::vector<Effect> effects;
+  FeMatrices fe;
+  std::string origin;  ///< model file path, for messages
+
+  const Body* FindBody(const std::string& name) const;
+  Body* FindBody(const std::string& name);
+  /// "file:line" of an element for error messages ("file" when line is 0).
+  std::string Where(int line) const;
+};
+
+}  // namespace ema::model

@@ -1,0 +1,88 @@
+// Operating-point solve, linearisation, assembly of M and K, and the generalised eigenproblem.
+//
+// DOF layout: 6 per body (ux uy uz rx ry rz at the body's centre, bodies in model order), then
+// the FE matrix rows in file order. A point r of a body moves u = u0 + theta x (r - centre).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <string>
+#include <vector>
+
+#include "ema/core/types.hpp"
+#include "ema/model/model.hpp"
+
+namespace ema::model {
+
+struct SolveOptions {
+  std::string setup;                    ///< setup name; empty = the nominal operating points
+  int max_modes = 0;                    ///< elastic modes kept; 0 = all (dense) / 20 (sparse)
+  std::vector<PointMass> extra_masses;  ///< added for this solve only (roving sensors)
+  /// Models with at least this many DOF use the sparse shift-invert solver.
+  int sparse_threshold = 10000;
+  /// Eigenvalues below rigid_tolerance x the largest |eigenvalue| are rigid-body modes (dense),
+  /// and below (2 pi 1e-3 Hz)^2 in absolute terms for the sparse path.
+  double rigid_tolerance = 1e-9;
+};
+
+/// The operating point and linearised stiffness of one spring (for --explain and diagnosis).
+struct SpringState {
+  std::string name;
+  std::string group;
+  std::string law;           ///< law kind name
+  double force = 0.0;        ///< N (N m for rotational), compression positive
+  double deflection = 0.0;   ///< compression of the whole law, m
+  double stiffness = 0.0;    ///< linearised stiffness incl. stiffness_factor, N/m
+  /// Series chains: solved air gap (NaN without air film) and each element's compression and
+  /// stiffness, in element order.
+  double gap = kNaN;
+  std::vector<double> element_deflections;
+  std::vector<double> element_stiffnesses;
+};
+
+/// Kinetic-energy share of each body (and "fe" for the FE part) in each mode.
+struct EnergyShare {
+  std::string body;
+  std::vector<double> share;  ///< per mode of Solution::modes, 0..1
+};
+
+/// The assembled linear system at the operating point.
+struct System {
+  Eigen::SparseMatrix<double> mass;
+  Eigen::SparseMatrix<double> stiffness;
+  std::vector<std::string> dof_names;   ///< "carriage:ux", "fe:1234:uz"
+  std::vector<SpringState> springs;
+  /// Rows: test point x (+X,+Y,+Z), in ModeSet::dofs order; columns: system DOFs.
+  Eigen::SparseMatrix<double> observation;
+  std::vector<Dof> observed_dofs;
+  std::vector<Node> geometry;           ///< test point positions
+  int body_dof_count = 0;
+};
+
+struct Solution {
+  /// Elastic modes: shapes at test points x (+X,+Y,+Z), real values stored as complex,
+  /// mass-normalised (unit modal mass), damping from [damping], poles from (f, zeta).
+  ModeSet modes;
+  std::vector<double> rigid_body_frequencies_hz;  ///< zero modes, reported apart
+  std::vector<SpringState> springs;
+  std::vector<EnergyShare> energy;
+  Eigen::MatrixXd full_shapes;                    ///< system DOFs x modes, mass-normalised
+  std::vector<std::string> dof_names;
+  bool sparse = false;                            ///< solved with the sparse shift-invert path
+};
+
+/// Operating point and linearised stiffness of one law. `override_value` (NaN = none) replaces
+/// the law's operating value. Throws InputError (with `where`) when there is no equilibrium or
+/// the operating point lies outside a table.
+SpringState LinearizeLaw(const Law& law, const std::string& where, double override_value = kNaN);
+
+/// Assembles M and K at the operating point of `options.setup`.
+System Assemble(const Model& model, const SolveOptions& options = {});
+
+/// Solves the model: applies pending effects, assembles, and solves the eigenproblem.
+Solution Solve(const Model& model, const SolveOptions& options = {});
+
+/// Human-readable explanation (ema model --explain): springs, chains, energy shares.
+std::string Explain(const Solution& solution);
+
+}  // namespace ema::model
