@@ -1,0 +1,36 @@
+// Mode shapes by least-squares frequency-domain fitting with known poles and participation
+// factors, real lower and upper residuals (algorithms.md §4).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "ema/core/types.hpp"
+#include "ema/curvefit/fit_data.hpp"
+#include "ema/curvefit/stabilisation.hpp"
+
+namespace ema::curvefit {
+
+struct LsfdOptions {
+  bool lower_residual = true;
+  bool upper_residual = true;
+};
+
+struct LsfdResult {
+  ModeSet modes;                     ///< one mode per pole, shapes at FitData::outputs
+  Eigen::MatrixXcd residues;         ///< (l·m) × N receptance residues phi_or·l_ir (column per mode)
+  double synthesis_error = 0.0;      ///< ||H - H_fit|| / ||H|| over the band (weighted as fitted)
+};
+
+/// Fits the shapes phi_r of H_o = sum_r phi_or l_r^T/(jw - lambda_r) + c.c. + residuals, with the
+/// FRF-type factor (jw)^k so the unknowns are receptance residues (§1.9). Uses the fitted poles
+/// (with window damping) and reports the corrected ones. Shapes are scaled to unit modal mass
+/// where a driving point exists, otherwise to unit largest component.
+LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPole>& poles,
+                              const LsfdOptions& options = {});
+
+/// MPC (eigenvalue form, 0..1, 1 = real mode) and MPD (degrees, 0 = real mode), §4.4.
+double ModalPhaseCollinearity(const Eigen::VectorXcd& shape);
+double MeanPhaseDeviationDeg(const Eigen::VectorXcd& shape);
+
+}  // namespace ema::curvefit

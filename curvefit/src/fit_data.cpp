@@ -1,0 +1,126 @@
+#include "ema/curvefit/fit_data.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "ema/core/error.hpp"
+
+namespace ema::curvefit {
+
+namespace {
+
+std::string Hz(double f) {
+  std::ostringstream s;
+  s << f << " Hz";
+  return s.str();
+}
+
+}  // namespace
+
+FitData PrepareFitData(const FrfSet& frfs, const FitDataOptions& options, const std::string& source) {
+  const int n_lines = frfs.LineCount();
+  const int n_out = frfs.OutputCount();
+  const int n_ref = frfs.ReferenceCount();
+  if (n_out == 0 || n_ref == 0 || n_lines == 0) throw InputError(source, "no FRFs to fit");
+  if (static_cast<int>(frfs.h.size()) != n_ref)
+    throw InputError(source, "inconsistent references: " + std::to_string(n_ref) + " reference DOFs but " +
+                                 std::to_string(frfs.h.size()) + " FRF blocks");
+  for (int r = 0; r < n_ref; ++r)
+    if (frfs.h[r].rows() != n_lines || frfs.h[r].cols() != n_out)
+      throw InputError(source, "inconsistent references: FRFs of reference " + DofName(frfs.references[r]) +
+                                   " are " + std::to_string(frfs.h[r].rows()) + " lines x " +
+                                   std::to_string(frfs.h[r].cols()) + " outputs, expected " +
+                                   std::to_string(n_lines) + " x " + std::to_string(n_out));
+  for (int a = 0; a < n_ref; ++a)
+    for (int b = a + 1; b < n_ref; ++b)
+      if (frfs.references[a] == frfs.references[b])
+        throw InputError(source, "inconsistent references: reference " + DofName(frfs.references[a]) +
+                                     " appears twice");
+
+  // Uniform grid: the Toeplitz/FFT assembly relies on it.
+  if (n_lines < 2) throw InputError(source, "only one frequency line");
+  const double df = (frfs.frequency_hz[n_lines - 1] - frfs.frequency_hz[0]) / (n_lines - 1);
+  if (!(df > 0.0)) throw InputError(source, "frequency axis is not increasing");
+  for (int k = 1; k < n_lines; ++k)
+    if (std::abs(frfs.frequency_hz[k] - frfs.frequency_hz[k - 1] - df) > 1e-6 * df)
+      throw InputError(source, "frequency lines are not uniformly spaced (line " + std::to_string(k) + ")");
+
+  const double lo = std::max(options.band_lo_hz, 0.0);
+  const double hi = options.band_hi_hz > 0.0 ? options.band_hi_hz : frfs.frequency_hz[n_lines - 1];
+  if (!(hi > lo)) throw InputError(source, "empty band " + Hz(lo) + " to " + Hz(hi));
+  int first = -1, last = -1;
+  for (int k = 0; k < n_lines; ++k) {
+    const double f = frfs.frequency_hz[k];
+    if (f <= 0.0 || f < lo - 1e-9 * df || f > hi + 1e-9 * df) continue;
+    if (first < 0) first = k;
+    last = k;
+  }
+  if (first < 0)
+    throw InputError(source, "no FRF lines in the band " + Hz(lo) + " to " + Hz(hi) + " (data cover " +
+                                 Hz(frfs.frequency_hz[0]) + " to " + Hz(frfs.frequency_hz[n_lines - 1]) + ")");
+
+  FitData d;
+  d.transposed = frfs.roving_hammer || (options.auto_transpose && n_ref > n_out);
+  d.outputs = d.transposed ? frfs.references : frfs.outputs;
+  d.references = d.transposed ? frfs.outputs : frfs.references;
+  d.frf_type = FrfTypeOf(frfs.output_quantity);
+  d.window_decay_rate = frfs.window_decay_rate;
+  d.line_spacing_hz = df;
+  const int n = last - first + 1;
+  const int l = d.OutputCount(), m = d.ReferenceCount();
+  d.frequency_hz = frfs.frequency_hz.segment(first, n);
+  d.h.resize(n, l * m);
+  for (int o = 0; o < l; ++o)
+    for (int i = 0; i < m; ++i) {
+      // H_oi of the fitting orientation; reciprocity makes H(a,b) = H(b,a).
+      const int ref = d.transposed ? o : i, out = d.transposed ? i : o;
+      d.h.col(o * m + i) = frfs.h[ref].col(out).segment(first, n);
+    }
+
+  // NaN screening: an FRF that is NaN everywhere was not measured; scattered NaN lines are skipped.
+  d.line_weight = Eigen::VectorXd::Ones(n);
+  for (int c = 0; c < l * m; ++c) {
+    bool any = false;
+    for (int k = 0; k < n && !any; ++k) any = std::isfinite(d.h(k, c).real()) && std::isfinite(d.h(k, c).imag());
+    if (!any) {
+      const int o = c / m, i = c % m;
+      throw InputError(source, "inconsistent references: no FRF from reference " + DofName(d.references[i]) +
+                                   " to output " + DofName(d.outputs[o]) +
+                                   " in the band (polyreference fitting needs every output from every reference)");
+    }
+  }
+  int bad = 0, run = 0, longest = 0, first_bad = -1;
+  for (int k = 0; k < n; ++k) {
+    const bool finite = d.h.row(k).allFinite();
+    if (!finite) {
+      d.line_weight[k] = 0.0;
+      d.h.row(k).setZero();
+      ++bad;
+      longest = std::max(longest, ++run);
+      if (first_bad < 0) first_bad = k;
+    } else {
+      run = 0;
+    }
+  }
+  if (bad > 0) {
+    std::ostringstream msg;
+    msg << bad << " of " << n << " lines in the band hold NaN or Inf (first at " << d.frequency_hz[first_bad]
+        << " Hz, longest run " << longest << " lines)";
+    if (bad > options.max_nan_fraction * n || longest > options.max_nan_run)
+      throw InputError(source, msg.str() + ": too many to skip; clean the data or narrow the band");
+    d.warnings.push_back(source + ": " + msg.str() + "; those lines are skipped");
+  }
+
+  // Per-output 1/RMS weight (algorithms.md §2.2): a few large FRFs must not dominate.
+  d.output_weight.resize(l);
+  const double used = std::max(1.0, d.line_weight.sum());
+  for (int o = 0; o < l; ++o) {
+    const double ss = d.h.middleCols(o * m, m).squaredNorm() / (used * m);
+    d.output_weight[o] = ss > 0.0 ? 1.0 / std::sqrt(ss) : 0.0;
+    if (ss <= 0.0) d.warnings.push_back(source + ": output " + DofName(d.outputs[o]) + " is zero in the band");
+  }
+  return d;
+}
+
+}  // namespace ema::curvefit

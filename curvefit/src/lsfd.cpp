@@ -1,0 +1,157 @@
+#include "ema/curvefit/lsfd.hpp"
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <cmath>
+
+#include "ema/core/error.hpp"
+
+namespace ema::curvefit {
+
+using cd = std::complex<double>;
+
+double ModalPhaseCollinearity(const Eigen::VectorXcd& shape) {
+  const Eigen::VectorXd x = shape.real(), y = shape.imag();
+  const double sxx = x.squaredNorm(), syy = y.squaredNorm(), sxy = x.dot(y);
+  const double den = (sxx + syy) * (sxx + syy);
+  return den > 0.0 ? ((sxx - syy) * (sxx - syy) + 4.0 * sxy * sxy) / den : kNaN;
+}
+
+double MeanPhaseDeviationDeg(const Eigen::VectorXcd& shape) {
+  const int n = static_cast<int>(shape.size());
+  if (n == 0) return kNaN;
+  Eigen::MatrixXd ri(n, 2);
+  ri.col(0) = shape.real();
+  ri.col(1) = shape.imag();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(ri, Eigen::ComputeFullV);
+  const double vx = svd.matrixV()(0, 0), vy = svd.matrixV()(1, 0);
+  double num = 0.0, den = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double a = std::abs(shape[i]);
+    if (a == 0.0) continue;
+    const double c = std::min(1.0, std::abs(shape[i].real() * vx + shape[i].imag() * vy) / a);
+    num += a * std::acos(c);
+    den += a;
+  }
+  return den > 0.0 ? num / den * 180.0 / M_PI : kNaN;
+}
+
+LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPole>& poles, const LsfdOptions& options) {
+  const int n = data.LineCount(), l = data.OutputCount(), m = data.ReferenceCount();
+  const int nm = static_cast<int>(poles.size());
+  const int n_res = (options.lower_residual ? m : 0) + (options.upper_residual ? m : 0);
+  const int n_unk = 2 * nm + n_res;
+  const int used = data.UsedLineCount();
+  if (2 * used * m < n_unk + 1)
+    throw InputError("lsfd", "too few valid lines (" + std::to_string(used) + ") for " + std::to_string(nm) + " modes");
+  const int k_pow = data.frf_type == FrfType::kReceptance ? 0 : data.frf_type == FrfType::kMobility ? 1 : 2;
+
+  // Design matrix, rows (line, reference, re/im); identical for every output (no per-output
+  // weights), so one QR serves all outputs.
+  const int rows = 2 * n * m;
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(rows, n_unk);
+  for (int f = 0; f < n; ++f) {
+    if (data.line_weight[f] == 0.0) continue;
+    const cd jw(0.0, kTwoPi * data.frequency_hz[f]);
+    const cd factor = std::pow(jw, k_pow);
+    for (int i = 0; i < m; ++i) {
+      const int row = 2 * (f * m + i);
+      auto put = [&](int col, cd v) {
+        P(row, col) = v.real();
+        P(row + 1, col) = v.imag();
+      };
+      for (int r = 0; r < nm; ++r) {
+        const cd lam = poles[r].pole.lambda_fitted;
+        const cd li = poles[r].pole.participation.size() == m ? poles[r].pole.participation[i] : cd(1.0);
+        const cd g1 = li / (jw - lam), g2 = std::conj(li) / (jw - std::conj(lam));
+        put(2 * r, factor * (g1 + g2));                 // Re phi
+        put(2 * r + 1, factor * cd(0, 1) * (g1 - g2));  // Im phi
+      }
+      int col = 2 * nm;
+      if (options.lower_residual) put(col + i, factor / (jw * jw)), col += m;
+      if (options.upper_residual) put(col + i, factor);
+    }
+  }
+  // Column scaling: modal, lower and upper regressors differ by orders of magnitude.
+  Eigen::VectorXd scale = P.colwise().norm().transpose();
+  for (int c = 0; c < n_unk; ++c) scale[c] = scale[c] > 0.0 ? 1.0 / scale[c] : 0.0;
+  P = P * scale.asDiagonal();
+  Eigen::MatrixXd B(rows, l);
+  for (int o = 0; o < l; ++o)
+    for (int f = 0; f < n; ++f)
+      for (int i = 0; i < m; ++i) {
+        const cd h = data.line_weight[f] == 0.0 ? cd(0.0) : data.H(f, o, i);
+        B(2 * (f * m + i), o) = h.real();
+        B(2 * (f * m + i) + 1, o) = h.imag();
+      }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(P);
+  Eigen::MatrixXd X = qr.solve(B);
+  const double err = (P * X - B).norm(), ref = B.norm();
+  X = scale.asDiagonal() * X;
+
+  LsfdResult result;
+  result.synthesis_error = ref > 0.0 ? err / ref : 0.0;
+  result.residues.resize(l * m, nm);
+  ModeSet& set = result.modes;
+  set.dofs = data.outputs;
+  // Driving points: output DOF equal to a reference DOF.
+  std::vector<std::pair<int, int>> driving;  // (output, reference)
+  for (int i = 0; i < m; ++i)
+    for (int o = 0; o < l; ++o)
+      if (data.outputs[o] == data.references[i]) driving.push_back({o, i});
+
+  for (int r = 0; r < nm; ++r) {
+    const Pole& pole = poles[r].pole;
+    Eigen::VectorXcd phi(l);
+    for (int o = 0; o < l; ++o) phi[o] = cd(X(2 * r, o), X(2 * r + 1, o));
+    Eigen::VectorXcd lr = pole.participation.size() == m ? pole.participation : Eigen::VectorXcd::Ones(m);
+    for (int o = 0; o < l; ++o)
+      for (int i = 0; i < m; ++i) result.residues(o * m + i, r) = phi[o] * lr[i];
+
+    Mode mode;
+    mode.pole = pole.lambda;
+    PoleToFrequencyAndDamping(pole.lambda, &mode.frequency_hz, &mode.damping_ratio);
+    mode.participation = lr;
+    mode.frequency_spread_hz = poles[r].frequency_spread_hz;
+    mode.damping_spread = poles[r].damping_spread;
+    Eigen::VectorXcd shape;
+    if (!driving.empty()) {
+      // c^2 = l_i / phi_{d_i}, weighted by |l_i phi_{d_i}| over the driving points (§4.2); then
+      // psi_hat = c phi is modal-A scaled and sqrt(2 j w_d) psi_hat has unit modal mass.
+      cd c2 = 0.0;
+      double wsum = 0.0;
+      for (auto [o, i] : driving) {
+        if (std::abs(phi[o]) == 0.0) continue;
+        const double w = std::abs(lr[i] * phi[o]);
+        c2 += w * lr[i] / phi[o];
+        wsum += w;
+      }
+      if (wsum > 0.0) {
+        const cd c = std::sqrt(c2 / wsum);
+        shape = phi * c * std::sqrt(cd(0.0, 2.0 * pole.lambda.imag()));
+        mode.unit_modal_mass = true;
+      }
+    }
+    if (shape.size() == 0) {
+      // No driving point: the residue column of the strongest reference, unit largest entry.
+      int imax = 0;
+      lr.cwiseAbs().maxCoeff(&imax);
+      shape = phi * lr[imax];
+      int omax = 0;
+      shape.cwiseAbs().maxCoeff(&omax);
+      if (std::abs(shape[omax]) > 0.0) shape /= shape[omax];
+    } else {
+      // The sign of a square root is arbitrary: make the largest entry's real part positive.
+      int omax = 0;
+      shape.cwiseAbs().maxCoeff(&omax);
+      if (shape[omax].real() < 0.0) shape = -shape;
+    }
+    mode.shape = shape;
+    mode.mpc = ModalPhaseCollinearity(shape);
+    mode.mpd = MeanPhaseDeviationDeg(shape);
+    set.modes.push_back(std::move(mode));
+  }
+  return result;
+}
+
+}  // namespace ema::curvefit

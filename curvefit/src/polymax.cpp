@@ -1,0 +1,313 @@
+// pLSCF / PolyMAX. Layout of the unknowns follows algorithms.md §2.2: alpha = [alpha_0; ..;
+// alpha_p] (m×m blocks), basis Omega = exp(-j w dt), constraint alpha_p = I.
+#include "ema/curvefit/polymax.hpp"
+
+#include <fftw3.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <thread>
+
+#include "ema/core/error.hpp"
+
+namespace ema::curvefit {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+/// Lags -P..P of sum_n x_n Omega_n^k, all series at once through one FFT each (§2.5).
+/// With f_n = f0 + n df and dt = 1/(N' df): Omega_n^k = exp(-j2pi f0 dt k) exp(-j2pi n k/N').
+class LagSums {
+ public:
+  LagSums(int fft_length, int lines, double phase_per_lag) : n_fft_(fft_length), lines_(lines) {
+    buffer_ = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * n_fft_));
+    plan_ = fftw_plan_dft_1d(n_fft_, buffer_, buffer_, FFTW_FORWARD, FFTW_ESTIMATE);
+    phase_per_lag_ = phase_per_lag;
+  }
+  ~LagSums() {
+    fftw_destroy_plan(plan_);
+    fftw_free(buffer_);
+  }
+  LagSums(const LagSums&) = delete;
+  LagSums& operator=(const LagSums&) = delete;
+
+  /// out[k + P] = sum_n x[n] Omega_n^k for k = -P..P.
+  void Compute(const Eigen::VectorXcd& x, int max_lag, Eigen::VectorXcd* out) {
+    for (int n = 0; n < n_fft_; ++n) {
+      buffer_[n][0] = n < lines_ ? x[n].real() : 0.0;
+      buffer_[n][1] = n < lines_ ? x[n].imag() : 0.0;
+    }
+    fftw_execute(plan_);
+    out->resize(2 * max_lag + 1);
+    for (int k = -max_lag; k <= max_lag; ++k) {
+      const int idx = ((k % n_fft_) + n_fft_) % n_fft_;
+      const std::complex<double> v(buffer_[idx][0], buffer_[idx][1]);
+      (*out)[k + max_lag] = v * std::polar(1.0, -phase_per_lag_ * k);
+    }
+  }
+
+ private:
+  int n_fft_, lines_;
+  double phase_per_lag_ = 0.0;
+  fftw_complex* buffer_ = nullptr;
+  fftw_plan plan_ = nullptr;
+};
+
+std::mutex fftw_planner_mutex;  // FFTW's planner is not thread-safe
+
+/// Cholesky of a symmetric positive (semi)definite matrix that stops where a pivot collapses;
+/// returns the size of the well-conditioned leading block. Leading blocks of L are the factors
+/// of the leading blocks of R, which is what lets one factorisation serve every order.
+int PartialCholesky(const Eigen::MatrixXd& r, Eigen::MatrixXd* l_out) {
+  const int n = static_cast<int>(r.rows());
+  Eigen::MatrixXd& l = *l_out;
+  l.setZero(n, n);
+  const double scale = r.diagonal().maxCoeff();
+  for (int j = 0; j < n; ++j) {
+    double d = r(j, j) - l.row(j).head(j).squaredNorm();
+    if (!(d > 1e-13 * scale)) return j;
+    l(j, j) = std::sqrt(d);
+    for (int i = j + 1; i < n; ++i) l(i, j) = (r(i, j) - l.row(i).head(j).dot(l.row(j).head(j))) / l(j, j);
+  }
+  return n;
+}
+
+}  // namespace
+
+int MaxSupportedOrder(const FitData& data) {
+  // A polynomial of order p has p+1 real coefficients per numerator; ask for at least as many
+  // valid complex lines as that (twice as many real equations), and lags below half the FFT.
+  const int lines = data.UsedLineCount();
+  const double f_hi = data.frequency_hz[data.LineCount() - 1];
+  const int n_fft = static_cast<int>(std::ceil(2.0 * f_hi / data.line_spacing_hz - 1e-9));
+  return std::max(0, std::min(lines - 1, (n_fft - 1) / 2));
+}
+
+int DefaultOrderMax(const FitData& data) {
+  const int m = std::max(1, data.ReferenceCount());
+  return std::min((120 + m - 1) / m, MaxSupportedOrder(data));
+}
+
+StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& options,
+                                   const ProgressCallback& progress, PolymaxTiming* timing) {
+  const auto t0 = Clock::now();
+  const int l = data.OutputCount(), m = data.ReferenceCount(), n = data.LineCount();
+  int order_max = options.order_max > 0 ? options.order_max : DefaultOrderMax(data);
+  const int supported = MaxSupportedOrder(data);
+  if (order_max > supported || supported < 1)
+    throw InputError("polymax", "order " + std::to_string(order_max) + " needs at least " +
+                                    std::to_string(order_max + 1) + " valid lines in the band, have " +
+                                    std::to_string(data.UsedLineCount()) + " (highest usable order " +
+                                    std::to_string(supported) + ")");
+  const int order_min = std::clamp(options.order_min, 1, order_max);
+
+  StabilisationDiagram diagram;
+  diagram.references = m;
+  diagram.frequency_hz = data.frequency_hz;
+  diagram.band_lo_hz = data.frequency_hz[0];
+  diagram.band_hi_hz = data.frequency_hz[n - 1];
+  diagram.sum_frf = data.h.cwiseAbs().rowwise().sum();
+  diagram.warnings = data.warnings;
+
+  // Frequency normalisation (§2.9): the highest line maps to angle ~pi; dt = 1/(N' df) with an
+  // integer FFT length N' so that the lag sums come from FFTs.
+  const double df = data.line_spacing_hz, f0 = data.frequency_hz[0], f_hi = data.frequency_hz[n - 1];
+  const int n_fft = std::max(static_cast<int>(std::ceil(2.0 * f_hi / df - 1e-9)), n);
+  const double dt = 1.0 / (n_fft * df);
+  int P = order_max;
+
+  // Weighted data: per-output 1/RMS, skipped lines zeroed (weights may vary per (o, f), §2.5).
+  Eigen::MatrixXcd hw(n, l * m);
+  for (int o = 0; o < l; ++o)
+    for (int i = 0; i < m; ++i)
+      hw.col(o * m + i) = data.h.col(o * m + i).cwiseProduct(data.line_weight) * data.output_weight[o];
+
+  Eigen::VectorXcd r_lag;
+  std::vector<Eigen::VectorXcd> s_lag(l * m);     // per (o, i)
+  std::vector<Eigen::VectorXcd> t_lag(m * m);     // summed over outputs, per (i, j)
+  {
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex);
+    LagSums lags(n_fft, n, kTwoPi * f0 * dt);
+    lags.Compute(data.line_weight.cast<std::complex<double>>(), P, &r_lag);
+    for (int c = 0; c < l * m; ++c) lags.Compute(hw.col(c), P, &s_lag[c]);
+    for (int i = 0; i < m; ++i)
+      for (int j = i; j < m; ++j) {
+        Eigen::VectorXcd x = Eigen::VectorXcd::Zero(n);
+        for (int o = 0; o < l; ++o) x += hw.col(o * m + i).conjugate().cwiseProduct(hw.col(o * m + j));
+        lags.Compute(x, P, &t_lag[i * m + j]);
+        if (j != i) {  // t_ji[k] = conj(t_ij[-k])
+          t_lag[j * m + i] = t_lag[i * m + j].reverse().conjugate();
+        }
+      }
+  }
+
+  const int lag0 = static_cast<int>(r_lag.size() / 2);  // index of lag 0
+  // R (Toeplitz) and its Cholesky factor, once for the highest order.
+  Eigen::MatrixXd R(P + 1, P + 1);
+  for (int a = 0; a <= P; ++a)
+    for (int b = 0; b <= P; ++b) R(a, b) = r_lag[b - a + lag0].real();
+  Eigen::MatrixXd L;
+  const int good = PartialCholesky(R, &L);
+  if (good < P + 1) {
+    const int capped = good - 1;
+    if (capped < order_min)
+      throw InputError("polymax", "the band is too narrow for any model order (normal equations singular)");
+    diagram.warnings.push_back("polymax: normal equations become singular above order " + std::to_string(capped) +
+                               " (narrow band); orders capped at " + std::to_string(capped));
+    P = capped;
+    L = L.topLeftCorner(P + 1, P + 1).eval();
+  }
+  order_max = P;
+  const int nc = m * (P + 1);
+
+  // Z_o = L^{-1} S_o, stored by row c (Zrows[c] is l × nc): the numerator is eliminated with
+  // M_p = T_p - sum_{c<=p} Z[c]^T Z[c] restricted to the leading m(p+1) block (§2.3), so one
+  // triangular solve at P serves every order.
+  std::vector<Eigen::MatrixXd> zrows(P + 1, Eigen::MatrixXd(l, nc));
+  {
+    Eigen::MatrixXd s(P + 1, nc);
+    for (int o = 0; o < l; ++o) {
+      for (int a = 0; a <= P; ++a)
+        for (int b = 0; b <= P; ++b)
+          for (int i = 0; i < m; ++i) s(a, b * m + i) = -s_lag[o * m + i][b - a + lag0].real();
+      L.triangularView<Eigen::Lower>().solveInPlace(s);
+      for (int c = 0; c <= P; ++c) zrows[c].row(o) = s.row(c);
+    }
+  }
+  Eigen::MatrixXd T(nc, nc);
+  for (int a = 0; a <= P; ++a)
+    for (int b = 0; b <= P; ++b)
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < m; ++j) T(a * m + i, b * m + j) = t_lag[i * m + j][b - a + lag0].real();
+
+  // Per-order reduced matrices M_p (leading blocks), by rank-l updates of G.
+  std::vector<Eigen::MatrixXd> reduced(P + 1);
+  {
+    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(nc, nc);
+    for (int c = 0; c <= P; ++c) {
+      G.selfadjointView<Eigen::Lower>().rankUpdate(zrows[c].transpose());
+      if (c >= order_min) {
+        const int k = m * (c + 1);
+        Eigen::MatrixXd mp = T.topLeftCorner(k, k);
+        mp.triangularView<Eigen::Lower>() -= G.topLeftCorner(k, k);
+        reduced[c] = mp.selfadjointView<Eigen::Lower>();
+      }
+    }
+  }
+  const auto t1 = Clock::now();
+
+  // Per order: constrained LS solve, companion eigenvalues, participation vectors. Orders are
+  // independent here, so they run on a small thread pool.
+  const int n_orders = order_max - order_min + 1;
+  diagram.orders.assign(n_orders, {});
+  diagram.order_min = order_min;
+  diagram.order_max = order_max;
+  std::atomic<int> next{0};
+  std::atomic<int> done{0};
+  std::mutex progress_mutex;
+  std::vector<double> solve_time, eig_time;
+  const int n_threads = std::max(1, std::min(options.threads > 0 ? options.threads
+                                                                 : static_cast<int>(std::thread::hardware_concurrency()),
+                                             n_orders));
+  solve_time.assign(n_threads, 0.0);
+  eig_time.assign(n_threads, 0.0);
+  const double band_lo = diagram.band_lo_hz, band_hi = diagram.band_hi_hz;
+  auto worker = [&](int tid) {
+    for (;;) {
+      // Largest orders first: better load balance.
+      const int idx = next.fetch_add(1);
+      if (idx >= n_orders) break;
+      const int p = order_max - idx;
+      const auto a0 = Clock::now();
+      const Eigen::MatrixXd& M = reduced[p];
+      const int na = m * p;
+      Eigen::MatrixXd alpha(m * (p + 1), m);
+      alpha.topRows(na) = -M.topLeftCorner(na, na).ldlt().solve(M.block(0, na, na, m));
+      alpha.bottomRows(m).setIdentity();
+      const auto a1 = Clock::now();
+
+      // Companion built from the TRANSPOSED coefficients: its eigenvectors then carry the left
+      // null vectors of A(Omega), i.e. the participation factors (§2.7).
+      Eigen::MatrixXd C = Eigen::MatrixXd::Zero(na, na);
+      for (int j = 0; j + 1 < p; ++j) C.block(j * m, (j + 1) * m, m, m).setIdentity();
+      for (int j = 0; j < p; ++j) C.block((p - 1) * m, j * m, m, m) = -alpha.block(j * m, 0, m, m).transpose();
+      Eigen::EigenSolver<Eigen::MatrixXd> es(C, false);
+      std::vector<Pole> poles;
+      const Eigen::VectorXcd& z = es.eigenvalues();
+      // m = 1 vector test: shape B(Omega) = -(L^{-1} v)^T (Z alpha) with v = [1, Omega, .., Omega^p].
+      Eigen::MatrixXd za;
+      if (m == 1) {
+        za.resize(p + 1, l);
+        for (int c = 0; c <= p; ++c) za.row(c) = (zrows[c].leftCols(p + 1) * alpha.col(0)).transpose();
+      }
+      for (int k = 0; k < na; ++k) {
+        const std::complex<double> om = z[k];
+        if (!(om.imag() < 0.0) || std::abs(om) == 0.0) continue;  // Im(lambda) > 0 member only
+        Pole pole;
+        pole.order = p;
+        pole.lambda_fitted = -std::log(om) / dt;
+        pole.lambda = pole.lambda_fitted + data.window_decay_rate;
+        PoleToFrequencyAndDamping(pole.lambda, &pole.frequency_hz, &pole.damping_ratio);
+        pole.physical = pole.damping_ratio > 0.0 && pole.damping_ratio < options.damping_max &&
+                        pole.frequency_hz >= band_lo && pole.frequency_hz <= band_hi;
+        if (m >= 2) {
+          Eigen::MatrixXcd a = Eigen::MatrixXcd::Zero(m, m);
+          std::complex<double> zp = 1.0;
+          for (int j = 0; j <= p; ++j, zp *= om) a += zp * alpha.block(j * m, 0, m, m).cast<std::complex<double>>();
+          Eigen::JacobiSVD<Eigen::MatrixXcd> svd(a.transpose(), Eigen::ComputeFullV);
+          pole.participation = svd.matrixV().col(m - 1);
+        } else {
+          pole.participation = Eigen::VectorXcd::Ones(1);
+          if (pole.physical) {
+            Eigen::VectorXcd v(p + 1);
+            std::complex<double> zp = 1.0;
+            for (int j = 0; j <= p; ++j, zp *= om) v[j] = zp;
+            L.topLeftCorner(p + 1, p + 1).triangularView<Eigen::Lower>().solveInPlace(v);
+            pole.shape = -(za.transpose().cast<std::complex<double>>() * v);
+            const double nrm = pole.shape.norm();
+            if (nrm > 0) pole.shape /= nrm;
+          }
+        }
+        const double nrm = pole.participation.norm();
+        if (nrm > 0) pole.participation /= nrm;
+        poles.push_back(std::move(pole));
+      }
+      std::sort(poles.begin(), poles.end(), [](const Pole& a, const Pole& b) { return a.frequency_hz < b.frequency_hz; });
+      diagram.orders[p - order_min] = std::move(poles);
+      const auto a2 = Clock::now();
+      solve_time[tid] += Seconds(a0, a1);
+      eig_time[tid] += Seconds(a1, a2);
+      const int finished = ++done;
+      if (progress) {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        progress(static_cast<double>(finished) / n_orders, "poles");
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < n_threads; ++t) pool.emplace_back(worker, t);
+  worker(0);
+  for (auto& th : pool) th.join();
+  const auto t2 = Clock::now();
+  if (timing) {
+    timing->normal_equations = Seconds(t0, t1);
+    timing->solve_and_eigen_wall = Seconds(t1, t2);
+    timing->solves = 0.0;
+    timing->eigenvalues = 0.0;
+    for (int t = 0; t < n_threads; ++t) {
+      timing->solves += solve_time[t];
+      timing->eigenvalues += eig_time[t];
+    }
+  }
+  return diagram;
+}
+
+}  // namespace ema::curvefit
