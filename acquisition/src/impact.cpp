@@ -1,0 +1,263 @@
+#include "ema/acquisition/impact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+namespace ema::acquisition {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string Format(const char* fmt, double a, double b = 0.0, double c = 0.0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
+
+double Mean(const std::vector<double>& x, int begin, int end) {
+  if (end <= begin) return 0.0;
+  double s = 0.0;
+  for (int i = begin; i < end; ++i) s += x[i];
+  return s / (end - begin);
+}
+
+double Rms(const std::vector<double>& x, int begin, int end, double dc) {
+  if (end <= begin) return 0.0;
+  double s = 0.0;
+  for (int i = begin; i < end; ++i) s += (x[i] - dc) * (x[i] - dc);
+  return std::sqrt(s / (end - begin));
+}
+
+}  // namespace
+
+int CountPulses(const std::vector<double>& x, double high, double low) {
+  int count = 0;
+  bool armed = true;
+  for (double v : x) {
+    const double a = std::abs(v);
+    if (armed && a > high) {
+      ++count;
+      armed = false;
+    } else if (!armed && a < low) {
+      armed = true;
+    }
+  }
+  return count;
+}
+
+double AutocorrelationSecondaryPeak(const std::vector<double>& x, int begin, int end, int min_lag) {
+  begin = std::max(0, begin);
+  end = std::min(static_cast<int>(x.size()), end);
+  double r0 = 0.0;
+  for (int i = begin; i < end; ++i) r0 += x[i] * x[i];
+  if (r0 <= 0.0) return 0.0;
+  double best = 0.0;
+  for (int lag = std::max(1, min_lag); lag < end - begin; ++lag) {
+    double r = 0.0;
+    for (int i = begin; i + lag < end; ++i) r += x[i] * x[i + lag];
+    best = std::max(best, r / r0);
+  }
+  return best;
+}
+
+std::string ClippingReason(const std::vector<double>& x, double full_scale, double overload_fraction, int flat_top_run) {
+  double peak = 0.0;
+  for (double v : x) peak = std::max(peak, std::abs(v));
+  if (peak <= 0.0) return "";
+  if (std::isfinite(full_scale) && full_scale > 0.0 && peak > overload_fraction * full_scale)
+    return Format("overload: peak %.6g exceeds %.0f %% of the full scale %.6g", peak, 100.0 * overload_fraction, full_scale);
+  // Flat top: a run of consecutive samples at the extreme value (same sign), as a saturated ADC gives.
+  const double tol = 1e-9 * peak;
+  int run = 0, longest = 0;
+  double prev_sign = 0.0;
+  for (double v : x) {
+    const bool at_peak = std::abs(v) >= peak - tol;
+    const double sign = v >= 0 ? 1.0 : -1.0;
+    run = at_peak ? (run > 0 && sign == prev_sign ? run + 1 : 1) : 0;
+    prev_sign = sign;
+    longest = std::max(longest, run);
+  }
+  if (longest >= flat_top_run)
+    return Format("clipped: flat top of %.0f consecutive samples at the extreme value %.6g", longest, peak);
+  return "";
+}
+
+ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& opt) {
+  ProcessedTest out;
+  const double dt = test.sample_interval_s;
+  const int n = test.samples;
+  out.impacts.resize(test.impacts.size());
+  for (size_t k = 0; k < test.impacts.size(); ++k) {
+    const Impact& imp = test.impacts[k];
+    ImpactAnalysis& a = out.impacts[k];
+    const std::vector<double>& f = test.records[imp.force].samples;
+    // Peak and polarity (a hammer may be wired negative), trigger on the rising edge.
+    int p = 0;
+    for (int i = 1; i < n; ++i)
+      if (std::abs(f[i]) > std::abs(f[p])) p = i;
+    const double sign0 = f[p] >= 0 ? 1.0 : -1.0;
+    int trig = 0;
+    while (trig < p && sign0 * f[trig] < opt.trigger_level * std::abs(f[p])) ++trig;
+    int pre_end = std::max(0, trig - 1);
+    a.force_dc = Mean(f, 0, pre_end);
+    std::vector<double> y(n);
+    for (int i = 0; i < n; ++i) y[i] = sign0 * (f[i] - a.force_dc);
+    const double peak = y[p];
+    a.force_peak = sign0 * peak;
+    // Re-trigger on the DC-free signal.
+    trig = 0;
+    while (trig < p && y[trig] < opt.trigger_level * peak) ++trig;
+    a.trigger_index = trig;
+    // Contact time of the main pulse: samples above 5 % of the peak span 0.968 T_c of a half-sine.
+    int left = p, right = p;
+    while (left > 0 && y[left - 1] > 0.05 * peak) --left;
+    while (right + 1 < n && y[right + 1] > 0.05 * peak) ++right;
+    const double span_to_tc = 1.0 - 2.0 * std::asin(0.05) / kPi;
+    a.contact_time_s = std::max(2.0 * dt, (right - left + 1) * dt / span_to_tc);
+    const int tc_samples = std::max(1, static_cast<int>(std::ceil(a.contact_time_s / dt)));
+    // Double hit: hysteresis pulse count, and the autocorrelation's secondary peak past 1.5 T_c.
+    a.pulse_count = CountPulses(y, opt.double_hit_high * peak, opt.double_hit_low * peak);
+    const int seg_begin = left - tc_samples;
+    const int seg_end = left + std::max(static_cast<int>(std::ceil(0.02 / dt)), 20 * tc_samples);
+    a.autocorrelation_peak = AutocorrelationSecondaryPeak(y, seg_begin, seg_end,
+                                                          std::max(2, static_cast<int>(std::ceil(1.5 * a.contact_time_s / dt))));
+    const bool double_hit = a.pulse_count > 1 || a.autocorrelation_peak > opt.double_hit_autocorrelation;
+    int last_pulse_end = right;
+    if (double_hit) {
+      for (int i = n - 1; i > right; --i)
+        if (y[i] > opt.double_hit_high * peak) {
+          last_pulse_end = i;
+          while (last_pulse_end + 1 < n && y[last_pulse_end + 1] > 0.05 * peak) ++last_pulse_end;
+          break;
+        }
+      if (opt.reject_double_hits) {
+        a.accepted = false;
+        a.reason = a.pulse_count > 1
+                       ? Format("double hit: %.0f force pulses above %.0f %% of the peak", a.pulse_count,
+                                100.0 * opt.double_hit_high)
+                       : Format("double hit: force autocorrelation secondary peak %.3f > %.3f", a.autocorrelation_peak,
+                                opt.double_hit_autocorrelation);
+      }
+    }
+    // Force window: 1 through the last pulse + k T_c (at least 5 ms or 8 samples), cosine taper T_c.
+    const double hold = std::max({opt.force_window_pulses * a.contact_time_s, 5e-3, 8 * dt});
+    a.force_window_end_s = (last_pulse_end + 1) * dt + hold;
+    a.force_taper_s = std::max(opt.force_taper_pulses * a.contact_time_s, 2 * dt);
+    const TimeRecord& fr = test.records[imp.force];
+    if (a.accepted) {
+      const std::string clip = ClippingReason(f, fr.full_scale, opt.overload_fraction, opt.flat_top_run);
+      if (!clip.empty()) {
+        a.accepted = false;
+        a.reason = "force " + clip;
+      }
+    }
+    // Responses: DC from the pre-trigger, clipping, motion before the impact, end level.
+    pre_end = std::max(0, trig - 1);
+    const int tail = std::max(4, n / 20);
+    for (int idx : imp.responses) {
+      const TimeRecord& r = test.records[idx];
+      const std::vector<double>& x = r.samples;
+      const double dc = Mean(x, 0, pre_end);
+      double rpeak = 0.0;
+      for (double v : x) rpeak = std::max(rpeak, std::abs(v - dc));
+      std::string why = ClippingReason(x, r.full_scale, opt.overload_fraction, opt.flat_top_run);
+      if (!why.empty()) why = "response " + DofName(r.channel) + " " + why;
+      const double pre_rms = Rms(x, 0, pre_end, dc);
+      if (why.empty() && pre_end >= 8 && rpeak > 0.0 && pre_rms > opt.pretrigger_motion * rpeak)
+        why = "response " + DofName(r.channel) +
+              Format(" was moving before the impact: pre-trigger rms %.1f %% of its peak (limit %.1f %%)",
+                     100.0 * pre_rms / rpeak, 100.0 * opt.pretrigger_motion);
+      if (why.empty() && rpeak <= 0.0) why = "response " + DofName(r.channel) + " is identically zero";
+      // Envelope at the end: rms of the last 5 % less the noise (pre-trigger) rms, × sqrt 2.
+      const double end_rms = Rms(x, n - tail, n, dc);
+      const double noise = pre_end >= 8 ? pre_rms : 0.0;
+      const double end_amp = std::sqrt(2.0 * std::max(0.0, end_rms * end_rms - noise * noise));
+      a.response_dc.push_back(dc);
+      a.response_end_level.push_back(rpeak > 0.0 ? end_amp / rpeak : 0.0);
+      a.response_rejections.push_back(why);
+    }
+  }
+  // Impact-level spread: peak force against the median of its point (per set and reference).
+  std::map<std::pair<int, Dof>, std::vector<double>> levels;
+  for (size_t k = 0; k < test.impacts.size(); ++k)
+    if (out.impacts[k].accepted)
+      levels[{test.impacts[k].set, test.impacts[k].reference}].push_back(std::abs(out.impacts[k].force_peak));
+  for (size_t k = 0; k < test.impacts.size(); ++k) {
+    ImpactAnalysis& a = out.impacts[k];
+    if (!a.accepted) continue;
+    std::vector<double> v = levels[{test.impacts[k].set, test.impacts[k].reference}];
+    if (v.size() < 3) continue;  // a median of two says nothing
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    const double median = v[v.size() / 2];
+    const double dev = (std::abs(a.force_peak) - median) / median;
+    if (std::abs(dev) > opt.level_tolerance) {
+      a.accepted = false;
+      a.reason = Format("impact level %.4g is %.0f %% off the median %.4g of this point", std::abs(a.force_peak),
+                        100.0 * dev, median);
+    }
+  }
+  // Exponential window: the lightest decay that brings every kept response to the end level.
+  const double record_t = n * dt;
+  switch (opt.exp_window) {
+    case ExpWindowMode::kNone: out.decay_rate = 0.0; break;
+    case ExpWindowMode::kFixed: out.decay_rate = opt.exp_decay_rate; break;
+    case ExpWindowMode::kAuto: {
+      double rate = 0.0, worst = 0.0;
+      for (size_t k = 0; k < test.impacts.size(); ++k) {
+        const ImpactAnalysis& a = out.impacts[k];
+        if (!a.accepted) continue;
+        const double span = record_t - a.trigger_index * dt;
+        for (size_t j = 0; j < a.response_end_level.size(); ++j) {
+          if (!a.response_rejections[j].empty()) continue;
+          const double e = a.response_end_level[j];
+          worst = std::max(worst, e);
+          if (e > opt.exp_end_level && span > 0.0) rate = std::max(rate, std::log(e / opt.exp_end_level) / span);
+        }
+      }
+      out.decay_rate = rate;
+      if (rate > 0.0)
+        out.notes.push_back(Format("responses end at up to %.1f %% of their peak: exponential window 1/tau = %.4g 1/s "
+                                   "applied (poles shifted left by it; the fit removes it)",
+                                   100.0 * worst, rate));
+      break;
+    }
+  }
+  return out;
+}
+
+void WindowForce(const TimeRecord& record, const ImpactAnalysis& a, double decay_rate, double* out) {
+  const int n = static_cast<int>(record.samples.size());
+  const double dt = record.sample_interval_s;
+  const double t_trig = a.trigger_index * dt;
+  for (int i = 0; i < n; ++i) {
+    const double t = i * dt;
+    double w = 1.0;
+    if (t > a.force_window_end_s) {
+      const double u = (t - a.force_window_end_s) / a.force_taper_s;
+      w = u >= 1.0 ? 0.0 : 0.5 * (1.0 + std::cos(kPi * u));
+    }
+    if (decay_rate > 0.0 && t > t_trig) w *= std::exp(-decay_rate * (t - t_trig));
+    out[i] = w == 0.0 ? 0.0 : w * (record.samples[i] - a.force_dc);
+  }
+}
+
+void WindowResponse(const TimeRecord& record, const ImpactAnalysis& a, int slot, double decay_rate, double* out) {
+  const int n = static_cast<int>(record.samples.size());
+  const double dc = a.response_dc[slot];
+  if (decay_rate <= 0.0) {
+    for (int i = 0; i < n; ++i) out[i] = record.samples[i] - dc;
+    return;
+  }
+  const double dt = record.sample_interval_s;
+  const double step = std::exp(-decay_rate * dt);
+  double w = 1.0;
+  for (int i = 0; i < n; ++i) {
+    if (i > a.trigger_index) w *= step;  // e^{-rate (t - t_trig)}
+    out[i] = w * (record.samples[i] - dc);
+  }
+}
+
+}  // namespace ema::acquisition

@@ -1,0 +1,58 @@
+// Hammer test → FRF set: per-impact processing (acquisition/impact.hpp), FFT, spectral averaging
+// per (reference, response) FRF, estimator, coherence, quantity conversion, band selection.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "ema/acquisition/hammer_test.hpp"
+#include "ema/acquisition/impact.hpp"
+#include "ema/core/progress.hpp"
+#include "ema/core/types.hpp"
+#include "ema/frf/estimators.hpp"
+
+namespace ema::frf {
+
+struct FrfOptions {
+  Estimator estimator = Estimator::kH1;
+  acquisition::ImpactOptions impact;           ///< windows and quality gates
+  double band_lo_hz = 0.0;                     ///< keep lines in [band_lo_hz, band_hi_hz]
+  double band_hi_hz = std::numeric_limits<double>::infinity();
+  Quantity output_quantity = Quantity::kUnknown;  ///< kUnknown: as measured (the first response's quantity)
+};
+
+struct RejectedImpact {
+  int impact = 0;          ///< impact number as read
+  std::string set;         ///< file (roving set) the impact came from
+  std::string reason;
+};
+
+struct FrfSummaryEntry {
+  Dof response;
+  Dof reference;
+  int averages = 0;
+  std::vector<RejectedImpact> rejected;
+};
+
+struct FrfSummary {
+  std::vector<FrfSummaryEntry> frfs;
+  Estimator estimator = Estimator::kH1;
+  double window_decay_rate = 0.0;   ///< exponential window the FRFs carry (1/s)
+  bool roving_hammer = false;
+  int impacts = 0;                  ///< impacts in the test
+  int rejected_impacts = 0;         ///< impacts rejected for every FRF (force-channel gates)
+  std::vector<std::string> notes;
+};
+
+struct FrfResult {
+  FrfSet frfs;
+  FrfSummary summary;
+};
+
+/// Estimates every FRF of the test. Throws InputError (file, record, reasons) when every impact
+/// of an FRF is rejected.
+FrfResult EstimateFrfs(const acquisition::HammerTest& test, const FrfOptions& options = {},
+                       const ProgressCallback& progress = {});
+
+}  // namespace ema::frf

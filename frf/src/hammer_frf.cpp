@@ -1,0 +1,137 @@
+#include "ema/frf/hammer_frf.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <stdexcept>
+
+#include "ema/core/error.hpp"
+#include "ema/frf/fft.hpp"
+
+namespace ema::frf {
+
+using acquisition::HammerTest;
+using acquisition::Impact;
+using acquisition::ImpactAnalysis;
+
+FrfResult EstimateFrfs(const HammerTest& test, const FrfOptions& options, const ProgressCallback& progress) {
+  if (test.impacts.empty()) throw InputError("", "the hammer test holds no impact");
+  const acquisition::ProcessedTest processed = acquisition::AnalyseImpacts(test, options.impact);
+  const int n = test.samples;
+  const int n_refs = static_cast<int>(test.references.size());
+  const int n_out = static_cast<int>(test.outputs.size());
+  auto ref_index = [&](const Dof& d) {
+    return static_cast<int>(std::find(test.references.begin(), test.references.end(), d) - test.references.begin());
+  };
+  auto out_index = [&](const Dof& d) {
+    return static_cast<int>(std::find(test.outputs.begin(), test.outputs.end(), d) - test.outputs.begin());
+  };
+
+  // One accumulator per measured (reference, output) FRF, in order of first appearance.
+  std::map<std::pair<int, int>, int> bucket_of;
+  std::vector<std::pair<int, int>> keys;
+  std::vector<Quantity> bucket_quantity;
+  std::vector<std::string> bucket_origin;
+  std::vector<CrossSpectra> spectra;
+  std::vector<std::vector<RejectedImpact>> rejected;
+  RealFft force_fft(n), response_fft(n);
+  const int lines = force_fft.lines();
+  std::vector<std::complex<double>> x(lines);
+
+  FrfResult result;
+  FrfSummary& summary = result.summary;
+  summary.estimator = options.estimator;
+  summary.window_decay_rate = processed.decay_rate;
+  summary.roving_hammer = test.roving_hammer;
+  summary.impacts = static_cast<int>(test.impacts.size());
+  summary.notes = test.notes;
+  summary.notes.insert(summary.notes.end(), processed.notes.begin(), processed.notes.end());
+
+  for (size_t k = 0; k < test.impacts.size(); ++k) {
+    const Impact& imp = test.impacts[k];
+    const ImpactAnalysis& a = processed.impacts[k];
+    const int r = ref_index(imp.reference);
+    if (!a.accepted) ++summary.rejected_impacts;
+    bool force_done = false;
+    for (size_t slot = 0; slot < imp.responses.size(); ++slot) {
+      const TimeRecord& rec = test.records[imp.responses[slot]];
+      const int o = out_index(rec.channel);
+      auto [it, fresh] = bucket_of.emplace(std::make_pair(r, o), static_cast<int>(keys.size()));
+      if (fresh) {
+        keys.push_back({r, o});
+        bucket_quantity.push_back(rec.quantity);
+        bucket_origin.push_back(rec.origin);
+        spectra.emplace_back();
+        spectra.back().Resize(lines);
+        rejected.emplace_back();
+      }
+      const int b = it->second;
+      const std::string& why = !a.accepted ? a.reason : a.response_rejections[slot];
+      if (!why.empty()) {
+        rejected[b].push_back({imp.number, test.set_names[imp.set], why});
+        continue;
+      }
+      if (!force_done) {
+        acquisition::WindowForce(test.records[imp.force], a, processed.decay_rate, force_fft.input());
+        const std::complex<double>* fx = force_fft.Execute();
+        std::copy(fx, fx + lines, x.begin());
+        force_done = true;
+      }
+      acquisition::WindowResponse(rec, a, static_cast<int>(slot), processed.decay_rate, response_fft.input());
+      spectra[b].Add(x.data(), response_fft.Execute());
+    }
+    ReportProgress(progress, static_cast<double>(k + 1) / test.impacts.size(), "FRF");
+  }
+
+  // Every FRF needs at least one accepted impact.
+  for (size_t b = 0; b < keys.size(); ++b)
+    if (spectra[b].averages == 0) {
+      std::string reasons;
+      for (const RejectedImpact& ri : rejected[b])
+        reasons += "; impact " + std::to_string(ri.impact) + ": " + ri.reason;
+      throw InputError(bucket_origin[b], "every impact of FRF " + DofName(test.outputs[keys[b].second]) + " / " +
+                                             DofName(test.references[keys[b].first]) + " was rejected" + reasons);
+    }
+
+  FrfSet& set = result.frfs;
+  const double df = 1.0 / (n * test.sample_interval_s);
+  set.frequency_hz = Eigen::VectorXd::LinSpaced(lines, 0.0, df * (lines - 1));
+  set.references = test.references;
+  set.outputs = test.outputs;
+  set.roving_hammer = test.roving_hammer;
+  set.window_decay_rate = processed.decay_rate;
+  const Quantity measured = bucket_quantity.empty() ? Quantity::kAcceleration : bucket_quantity.front();
+  set.output_quantity = measured;
+  set.force_unit = test.records[test.impacts.front().force].unit.empty() ? "N" : test.records[test.impacts.front().force].unit;
+  const std::string& ru = test.records[test.impacts.front().responses.front()].unit;
+  if (!ru.empty()) set.response_unit = ru;
+  else set.response_unit = measured == Quantity::kDisplacement ? "m" : measured == Quantity::kVelocity ? "m/s" : "m/s^2";
+  const std::complex<double> nan_c(kNaN, kNaN);
+  set.h.assign(n_refs, Eigen::MatrixXcd::Constant(lines, n_out, nan_c));
+  set.coherence.assign(n_refs, Eigen::MatrixXd::Constant(lines, n_out, kNaN));
+  set.averages = Eigen::MatrixXi::Zero(n_refs, n_out);
+  for (size_t b = 0; b < keys.size(); ++b) {
+    const auto [r, o] = keys[b];
+    Eigen::ArrayXcd h = EstimateFrf(spectra[b], options.estimator);
+    // Sets measured with another response quantity join the first one's (spec §1.9).
+    h = ConvertFrf(h, set.frequency_hz, bucket_quantity[b], measured);
+    set.h[r].col(o) = h.matrix();
+    set.coherence[r].col(o) = Coherence(spectra[b]).matrix();
+    set.averages(r, o) = spectra[b].averages;
+    summary.frfs.push_back({test.outputs[o], test.references[r], spectra[b].averages, rejected[b]});
+  }
+  if (options.output_quantity != Quantity::kUnknown) ConvertFrfSet(&set, options.output_quantity);
+  if (options.band_lo_hz > 0.0 || std::isfinite(options.band_hi_hz)) {
+    try {
+      set = SelectBand(set, options.band_lo_hz, options.band_hi_hz);
+    } catch (const std::invalid_argument&) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "the band %g..%g Hz holds no spectral line (lines 0..%g Hz every %g Hz)",
+                    options.band_lo_hz, options.band_hi_hz, set.frequency_hz[lines - 1], df);
+      throw InputError(test.set_names.front(), buf);
+    }
+  }
+  return result;
+}
+
+}  // namespace ema::frf
