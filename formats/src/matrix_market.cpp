@@ -1,0 +1,92 @@
+// Matrix Market coordinate files (https://math.nist.gov/MatrixMarket/formats.html), written here
+// from the format description.
+#include "ema/formats/matrix_market.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "ema/core/error.hpp"
+#include "ema/formats/atomic_file.hpp"
+
+namespace ema::formats {
+
+Eigen::SparseMatrix<double> ReadMatrixMarket(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  const std::string file = path.string();
+  if (!in) throw InputError(file, "cannot open Matrix Market file");
+  std::string line;
+  int line_no = 0;
+  if (!std::getline(in, line)) throw InputError(file + ":1", "empty file, expected a %%MatrixMarket header");
+  ++line_no;
+  std::string lower = line;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::istringstream header(lower);
+  std::string banner, object, format, field, symmetry;
+  header >> banner >> object >> format >> field >> symmetry;
+  if (banner != "%%matrixmarket" || object != "matrix")
+    throw InputError(file + ":1", "expected '%%MatrixMarket matrix coordinate real symmetric|general', found '" + line + "'");
+  if (format != "coordinate") throw InputError(file + ":1", "only the 'coordinate' format is supported, found '" + format + "'");
+  if (field != "real" && field != "integer" && field != "double")
+    throw InputError(file + ":1", "field must be real or integer, found '" + field + "'");
+  if (symmetry != "symmetric" && symmetry != "general")
+    throw InputError(file + ":1", "symmetry must be symmetric or general, found '" + symmetry + "'");
+  const bool symmetric = symmetry == "symmetric";
+  long rows = -1, cols = -1, nnz = -1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '%' || line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream s(line);
+    if (!(s >> rows >> cols >> nnz) || rows < 0 || cols < 0 || nnz < 0)
+      throw InputError(file + ":" + std::to_string(line_no), "expected the size line 'rows cols entries'");
+    break;
+  }
+  if (rows < 0) throw InputError(file, "missing the size line 'rows cols entries'");
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(static_cast<std::size_t>(symmetric ? 2 * nnz : nnz));
+  long read = 0;
+  while (read < nnz && std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '%' || line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    long i = 0, j = 0;
+    double v = 0.0;
+    std::istringstream s(line);
+    if (!(s >> i >> j >> v))
+      throw InputError(file + ":" + std::to_string(line_no), "expected 'row col value'");
+    if (i < 1 || i > rows || j < 1 || j > cols)
+      throw InputError(file + ":" + std::to_string(line_no), "index (" + std::to_string(i) + ", " + std::to_string(j) +
+                                                                 ") outside the " + std::to_string(rows) + "x" +
+                                                                 std::to_string(cols) + " matrix");
+    if (symmetric && j > i)
+      throw InputError(file + ":" + std::to_string(line_no), "symmetric file holds an upper-triangle entry (" +
+                                                                 std::to_string(i) + ", " + std::to_string(j) + ")");
+    t.emplace_back(static_cast<int>(i - 1), static_cast<int>(j - 1), v);
+    if (symmetric && i != j) t.emplace_back(static_cast<int>(j - 1), static_cast<int>(i - 1), v);
+    ++read;
+  }
+  if (read < nnz)
+    throw InputError(file + ":" + std::to_string(line_no), "truncated: expected " + std::to_string(nnz) + " entries, found " +
+                                                               std::to_string(read));
+  Eigen::SparseMatrix<double> m(static_cast<int>(rows), static_cast<int>(cols));
+  m.setFromTriplets(t.begin(), t.end());
+  return m;
+}
+
+void WriteMatrixMarket(const std::filesystem::path& path, const Eigen::SparseMatrix<double>& matrix, bool symmetric) {
+  WriteFileAtomically(path, [&](std::ostream& out) {
+    long count = 0;
+    for (int c = 0; c < matrix.outerSize(); ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(matrix, c); it; ++it)
+        if (!symmetric || it.row() >= it.col()) ++count;
+    out << "%%MatrixMarket matrix coordinate real " << (symmetric ? "symmetric" : "general") << "\n";
+    out << matrix.rows() << " " << matrix.cols() << " " << count << "\n";
+    out.precision(17);
+    for (int c = 0; c < matrix.outerSize(); ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(matrix, c); it; ++it)
+        if (!symmetric || it.row() >= it.col()) out << it.row() + 1 << " " << it.col() + 1 << " " << it.value() << "\n";
+  });
+}
+
+}  // namespace ema::formats

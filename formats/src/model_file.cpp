@@ -1,0 +1,525 @@
+// The model file (model-format.md) read with toml++; every error names file:line and the key.
+#include "ema/formats/model_file.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "ema/core/error.hpp"
+#include "ema/core/types.hpp"
+#include "ema/formats/atomic_file.hpp"
+#include "ema/formats/matrix_market.hpp"
+
+namespace ema::formats {
+namespace {
+
+namespace fs = std::filesystem;
+using model::Law;
+
+class Reader {
+ public:
+  explicit Reader(const fs::path& path) : path_(path), file_(path.string()), dir_(path.parent_path()) {}
+
+  std::string At(const toml::node& n) const {
+    const auto line = n.source().begin.line;
+    return line > 0 ? file_ + ":" + std::to_string(line) : file_;
+  }
+  int Line(const toml::node& n) const { return static_cast<int>(n.source().begin.line); }
+
+  void CheckKeys(const toml::table& t, const std::set<std::string>& allowed, const std::string& context) const {
+    for (const auto& [key, value] : t) {
+      if (allowed.count(std::string(key.str()))) continue;
+      std::string list;
+      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+      throw InputError(At(value), "unknown key '" + std::string(key.str()) + "' in " + context + " (allowed: " + list + ")");
+    }
+  }
+
+  const toml::node& Require(const toml::table& t, const std::string& key, const std::string& context) const {
+    const toml::node* n = t.get(key);
+    if (!n) throw InputError(At(t), context + ": missing key '" + key + "'");
+    return *n;
+  }
+
+  double Number(const toml::node& n, const std::string& key) const {
+    if (auto v = n.value<double>(); v && (n.is_floating_point() || n.is_integer())) return *v;
+    throw InputError(At(n), "key '" + key + "': expected a number");
+  }
+  std::optional<double> OptNumber(const toml::table& t, const std::string& key) const {
+    const toml::node* n = t.get(key);
+    if (!n) return std::nullopt;
+    return Number(*n, key);
+  }
+  double NumberOr(const toml::table& t, const std::string& key, double fallback) const {
+    return OptNumber(t, key).value_or(fallback);
+  }
+  std::string String(const toml::node& n, const std::string& key) const {
+    if (auto v = n.value<std::string>(); v && n.is_string()) return *v;
+    throw InputError(At(n), "key '" + key + "': expected a string");
+  }
+  std::vector<double> Numbers(const toml::node& n, const std::string& key) const {
+    const toml::array* a = n.as_array();
+    if (!a) throw InputError(At(n), "key '" + key + "': expected an array of numbers");
+    std::vector<double> out;
+    for (const toml::node& e : *a) out.push_back(Number(e, key));
+    return out;
+  }
+  Eigen::Vector3d Vector3(const toml::node& n, const std::string& key) const {
+    const std::vector<double> v = Numbers(n, key);
+    if (v.size() != 3) throw InputError(At(n), "key '" + key + "': expected 3 numbers [x, y, z], found " + std::to_string(v.size()));
+    return {v[0], v[1], v[2]};
+  }
+  const toml::table& Table(const toml::node& n, const std::string& key) const {
+    const toml::table* t = n.as_table();
+    if (!t) throw InputError(At(n), "key '" + key + "': expected a table");
+    return *t;
+  }
+  fs::path Resolve(const std::string& p) const {
+    fs::path f(p);
+    return f.is_relative() ? dir_ / f : f;
+  }
+
+  /// Two-column CSV (optional header line): x,y.
+  void ReadCurve(const toml::node& n, std::vector<double>* x, std::vector<double>* y) const {
+    const fs::path f = Resolve(String(n, "file"));
+    std::ifstream in(f);
+    if (!in) throw InputError(At(n), "cannot open curve file '" + f.string() + "'");
+    std::string line;
+    int no = 0;
+    while (std::getline(in, line)) {
+      ++no;
+      if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
+      for (char& c : line)
+        if (c == ',' || c == ';' || c == '\t') c = ' ';
+      std::istringstream s(line);
+      double a = 0, b = 0;
+      if (!(s >> a >> b)) {
+        if (x->empty() && no == 1) continue;  // header
+        throw InputError(f.string() + ":" + std::to_string(no), "expected two numbers 'x,y'");
+      }
+      x->push_back(a);
+      y->push_back(b);
+    }
+  }
+
+  Law ParseLaw(const toml::node& node, const std::string& context) const {
+    const toml::table& t = Table(node, context);
+    static const std::set<std::string> kKinds = {"linear", "table", "air_film", "hertz", "series"};
+    if (t.size() != 1)
+      throw InputError(At(node), context + ": a law is a table with exactly one of linear, table, air_film, hertz, series");
+    const auto first = t.begin();
+    const std::string kind(first->first.str());
+    const toml::node& body_node = first->second;
+    if (!kKinds.count(kind))
+      throw InputError(At(body_node), context + ": unknown law '" + kind + "' (allowed: air_film, hertz, linear, series, table)");
+    const toml::table& b = Table(body_node, kind);
+    const std::string ctx = context + " law " + kind;
+    if (kind == "linear") {
+      CheckKeys(b, {"k"}, ctx);
+      return model::LinearLaw{Number(Require(b, "k", ctx), "k")};
+    }
+    if (kind == "table") {
+      CheckKeys(b, {"deflection", "force", "file", "operating_deflection", "operating_force"}, ctx);
+      model::TableLaw law;
+      if (const auto* f = b.get("file")) ReadCurve(*f, &law.deflection, &law.force);
+      for (const char* key : {"deflection", "force"}) {
+        const toml::node* n = b.get(key);
+        if (!n) continue;
+        const bool is_deflection = std::string(key) == "deflection";
+        if (n->is_array()) {
+          (is_deflection ? law.deflection : law.force) = Numbers(*n, key);
+        } else {
+          (is_deflection ? law.operating_deflection : law.operating_force) = Number(*n, key);
+        }
+      }
+      if (auto v = OptNumber(b, "operating_deflection")) law.operating_deflection = v;
+      if (auto v = OptNumber(b, "operating_force")) law.operating_force = v;
+      if (law.deflection.empty()) throw InputError(At(body_node), ctx + ": needs deflection = [..] and force = [..] or file");
+      return law;
+    }
+    if (kind == "air_film") {
+      CheckKeys(b, {"gap", "load", "file", "operating_gap"}, ctx);
+      model::AirFilmLaw law;
+      if (const auto* f = b.get("file")) ReadCurve(*f, &law.gap, &law.load);
+      if (const auto* g = b.get("gap")) {
+        if (g->is_array()) law.gap = Numbers(*g, "gap");
+        else law.operating_gap = Number(*g, "gap");
+      }
+      if (const auto* l = b.get("load")) law.load = Numbers(*l, "load");
+      if (auto v = OptNumber(b, "operating_gap")) law.operating_gap = *v;
+      if (law.gap.empty()) throw InputError(At(body_node), ctx + ": needs gap = [..] and load = [..] or file");
+      return law;
+    }
+    if (kind == "hertz") {
+      CheckKeys(b, {"modulus", "radius", "offset", "deflection", "force", "preload"}, ctx);
+      model::HertzLaw law;
+      law.modulus = Number(Require(b, "modulus", ctx), "modulus");
+      law.radius = Number(Require(b, "radius", ctx), "radius");
+      law.offset = NumberOr(b, "offset", 0.0);
+      law.operating_deflection = OptNumber(b, "deflection");
+      law.operating_force = OptNumber(b, "force");
+      if (auto p = OptNumber(b, "preload")) law.operating_force = p;
+      return law;
+    }
+    CheckKeys(b, {"elements", "setting", "force"}, ctx);
+    model::SeriesLaw law;
+    const toml::array* elements = Require(b, "elements", ctx).as_array();
+    if (!elements || elements->empty()) throw InputError(At(body_node), ctx + ": 'elements' must be a non-empty array of laws");
+    int i = 0;
+    for (const toml::node& e : *elements) law.elements.push_back(ParseLaw(e, ctx + " element " + std::to_string(++i)));
+    law.setting = NumberOr(b, "setting", 0.0);
+    law.force = OptNumber(b, "force");
+    return law;
+  }
+
+  model::Anchor ParseAnchor(const toml::node& node, const std::string& context) const {
+    const toml::table& t = Table(node, context);
+    CheckKeys(t, {"body", "at", "node"}, context);
+    return AnchorFrom(t, context, true);
+  }
+
+  /// body + at, or node (used by spring ends, masses and points).
+  model::Anchor AnchorFrom(const toml::table& t, const std::string& context, bool allow_ground) const {
+    model::Anchor a;
+    const toml::node* body = t.get("body");
+    const toml::node* node = t.get("node");
+    if (body && node) throw InputError(At(t), context + ": give either 'body' or 'node', not both");
+    if (node) {
+      const auto id = node->value<int64_t>();
+      if (!id || !node->is_integer() || *id <= 0) throw InputError(At(*node), context + ": 'node' must be a positive integer");
+      a.node = static_cast<int>(*id);
+      return a;
+    }
+    if (!body) throw InputError(At(t), context + ": missing key 'body' (or 'node')");
+    a.body = String(*body, "body");
+    if (!allow_ground && a.body == model::kGround) throw InputError(At(*body), context + ": cannot be on ground");
+    if (const toml::node* at = t.get("at")) {
+      a.at = Vector3(*at, "at");
+      a.has_at = true;
+    }
+    return a;
+  }
+
+  void ReadFe(const toml::table& t, model::Model* m) const {
+    CheckKeys(t, {"mass", "stiffness", "dofs", "nodes"}, "[fe]");
+    const fs::path mass = Resolve(String(Require(t, "mass", "[fe]"), "mass"));
+    const fs::path stiffness = Resolve(String(Require(t, "stiffness", "[fe]"), "stiffness"));
+    const fs::path dofs = Resolve(String(Require(t, "dofs", "[fe]"), "dofs"));
+    m->fe.mass = ReadMatrixMarket(mass);
+    m->fe.stiffness = ReadMatrixMarket(stiffness);
+    m->fe.origin = dofs.string();
+    // DOF map: node,dof per matrix row.
+    std::ifstream in(dofs);
+    if (!in) throw InputError(At(*t.get("dofs")), "cannot open DOF map '" + dofs.string() + "'");
+    std::string line;
+    int no = 0;
+    while (std::getline(in, line)) {
+      ++no;
+      if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
+      for (char& c : line)
+        if (c == ',' || c == ';' || c == '\t') c = ' ';
+      std::istringstream s(line);
+      long node = 0;
+      std::string dof;
+      if (!(s >> node >> dof)) {
+        if (no == 1) continue;  // header
+        throw InputError(dofs.string() + ":" + std::to_string(no), "expected 'node,dof'");
+      }
+      int code = 0;
+      static const char* kNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+      for (int i = 0; i < 6; ++i)
+        if (dof == kNames[i] || dof == std::to_string(i + 1)) code = i + 1;
+      if (code == 0) {
+        if (no == 1 && m->fe.dofs.empty()) continue;  // header such as "node,dof"
+        throw InputError(dofs.string() + ":" + std::to_string(no), "dof must be 1..6 or ux..rz, found '" + dof + "'");
+      }
+      m->fe.dofs.push_back({static_cast<int>(node), code});
+    }
+    if (m->fe.dofs.size() != static_cast<std::size_t>(m->fe.mass.rows()))
+      throw InputError(dofs.string(), "DOF map has " + std::to_string(m->fe.dofs.size()) + " rows but " + mass.string() +
+                                          " has " + std::to_string(m->fe.mass.rows()) + " rows");
+    if (m->fe.mass.rows() != m->fe.stiffness.rows())
+      throw InputError(stiffness.string(), "stiffness matrix has " + std::to_string(m->fe.stiffness.rows()) +
+                                               " rows but the mass matrix has " + std::to_string(m->fe.mass.rows()));
+    if (const toml::node* nodes = t.get("nodes")) ReadNodes(Resolve(String(*nodes, "nodes")), *nodes, m);
+  }
+
+  /// nodes.csv (node,x,y,z) or a UFF file with dataset 15 or 2411.
+  void ReadNodes(const fs::path& f, const toml::node& key, model::Model* m) const {
+    std::ifstream in(f);
+    if (!in) throw InputError(At(key), "cannot open nodes file '" + f.string() + "'");
+    std::vector<std::string> lines;
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+    auto is_delim = [](const std::string& l) { return l.size() >= 6 && l.substr(0, 6) == "    -1"; };
+    bool uff = false;
+    for (const auto& l : lines)
+      if (l.find_first_not_of(" \t\r") != std::string::npos) { uff = is_delim(l); break; }
+    auto fortran = [](std::string s) {
+      for (char& c : s)
+        if (c == 'D' || c == 'd') c = 'e';
+      return s;
+    };
+    if (!uff) {
+      for (std::size_t i = 0; i < lines.size(); ++i) {
+        std::string l = lines[i];
+        if (l.find_first_not_of(" \t\r") == std::string::npos || l[0] == '#') continue;
+        for (char& c : l)
+          if (c == ',' || c == ';' || c == '\t') c = ' ';
+        std::istringstream s(l);
+        long id;
+        double x, y, z;
+        if (!(s >> id >> x >> y >> z)) {
+          if (i == 0) continue;
+          throw InputError(f.string() + ":" + std::to_string(i + 1), "expected 'node,x,y,z'");
+        }
+        m->fe.node_positions[static_cast<int>(id)] = {x, y, z};
+      }
+      return;
+    }
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      if (!is_delim(lines[i]) || i + 1 >= lines.size()) continue;
+      std::istringstream ds(lines[i + 1]);
+      int type = 0;
+      ds >> type;
+      std::size_t j = i + 2;
+      if (type == 15) {
+        for (; j < lines.size() && !is_delim(lines[j]); ++j) {
+          std::istringstream s(fortran(lines[j]));
+          long id, a, b, c;
+          double x, y, z;
+          if (!(s >> id >> a >> b >> c >> x >> y >> z))
+            throw InputError(f.string() + ":" + std::to_string(j + 1), "dataset 15: expected 'node defcs dispcs color x y z'");
+          m->fe.node_positions[static_cast<int>(id)] = {x, y, z};
+        }
+      } else if (type == 2411) {
+        for (; j + 1 < lines.size() && !is_delim(lines[j]); j += 2) {
+          std::istringstream s1(lines[j]), s2(fortran(lines[j + 1]));
+          long id;
+          double x, y, z;
+          if (!(s1 >> id) || !(s2 >> x >> y >> z))
+            throw InputError(f.string() + ":" + std::to_string(j + 1), "dataset 2411: expected node record pair");
+          m->fe.node_positions[static_cast<int>(id)] = {x, y, z};
+        }
+      } else {
+        for (; j < lines.size() && !is_delim(lines[j]); ++j) {}
+      }
+      i = j;
+    }
+  }
+
+  model::Model Read() const {
+    toml::table root;
+    try {
+      root = toml::parse_file(path_.string());
+    } catch (const toml::parse_error& e) {
+      throw InputError(file_ + ":" + std::to_string(e.source().begin.line), std::string(e.description()));
+    }
+    model::Model m;
+    m.origin = file_;
+    CheckKeys(root, {"model", "body", "mass", "spring", "damping", "point", "fe", "setup", "effect"}, "the model file");
+    if (const toml::node* n = root.get("model")) {
+      const toml::table& t = Table(*n, "model");
+      CheckKeys(t, {"name", "description"}, "[model]");
+      if (const toml::node* name = t.get("name")) m.name = String(*name, "name");
+    }
+    auto each = [&](const char* key, auto&& fn) {
+      const toml::node* n = root.get(key);
+      if (!n) return;
+      const toml::array* a = n->as_array();
+      if (!a) throw InputError(At(*n), std::string("'") + key + "' must be an array of tables: [[" + key + "]]");
+      for (const toml::node& e : *a) fn(Table(e, key));
+    };
+    std::set<std::string> names;
+    each("body", [&](const toml::table& t) {
+      CheckKeys(t, {"name", "mass", "inertia", "products", "centre"}, "[[body]]");
+      model::Body b;
+      b.line = Line(t);
+      b.name = String(Require(t, "name", "[[body]]"), "name");
+      if (b.name == model::kGround) throw InputError(At(t), "[[body]]: 'ground' is a reserved body name");
+      if (!names.insert(b.name).second) throw InputError(At(t), "[[body]]: duplicate body name '" + b.name + "'");
+      b.mass = Number(Require(t, "mass", "[[body]] " + b.name), "mass");
+      if (!(b.mass > 0.0)) throw InputError(At(*t.get("mass")), "body '" + b.name + "': mass must be > 0");
+      b.inertia = Vector3(Require(t, "inertia", "[[body]] " + b.name), "inertia");
+      if (const toml::node* p = t.get("products")) b.products = Vector3(*p, "products");
+      if (const toml::node* c = t.get("centre")) b.centre = Vector3(*c, "centre");
+      m.bodies.push_back(b);
+    });
+    auto check_body = [&](const model::Anchor& a, const toml::table& t, const std::string& what) {
+      if (!a.IsNode() && !a.IsGround() && !names.count(a.body)) {
+        std::string known;
+        for (const auto& n : names) known += n + ", ";
+        throw InputError(At(t), what + ": unknown body '" + a.body + "' (known: " + known + "ground)");
+      }
+    };
+    each("mass", [&](const toml::table& t) {
+      CheckKeys(t, {"name", "body", "node", "at", "mass"}, "[[mass]]");
+      model::PointMass pm;
+      pm.line = Line(t);
+      if (const toml::node* n = t.get("name")) pm.name = String(*n, "name");
+      pm.where = AnchorFrom(t, "[[mass]] " + pm.name, false);
+      check_body(pm.where, t, "mass '" + pm.name + "'");
+      pm.mass = Number(Require(t, "mass", "[[mass]] " + pm.name), "mass");
+      if (!(pm.mass >= 0.0)) throw InputError(At(t), "mass '" + pm.name + "': mass must be >= 0");
+      m.masses.push_back(pm);
+    });
+    each("spring", [&](const toml::table& t) {
+      CheckKeys(t, {"name", "group", "kind", "a", "b", "direction", "law"}, "[[spring]]");
+      model::Spring s;
+      s.line = Line(t);
+      s.name = String(Require(t, "name", "[[spring]]"), "name");
+      const std::string ctx = "spring '" + s.name + "'";
+      s.group = t.get("group") ? String(*t.get("group"), "group") : s.name;
+      if (const toml::node* k = t.get("kind")) {
+        const std::string kind = String(*k, "kind");
+        if (kind == "rotational") s.kind = model::Spring::Kind::kRotational;
+        else if (kind != "translational")
+          throw InputError(At(*k), ctx + ": kind must be 'translational' or 'rotational', found '" + kind + "'");
+      }
+      s.a = ParseAnchor(Require(t, "a", ctx), ctx + " end a");
+      check_body(s.a, t, ctx + " end a");
+      if (const toml::node* b = t.get("b")) {
+        s.b = ParseAnchor(*b, ctx + " end b");
+        check_body(s.b, t, ctx + " end b");
+      } else {
+        s.b.body = model::kGround;
+      }
+      const toml::node& dir = Require(t, "direction", ctx);
+      if (dir.is_string()) {
+        const int code = ParseDirection(String(dir, "direction"));
+        if (code == 0 || std::abs(code) > 3) throw InputError(At(dir), ctx + ": direction must be [x, y, z] or +X/-Y/...");
+        s.direction = Eigen::Vector3d::Unit(std::abs(code) - 1) * (code < 0 ? -1.0 : 1.0);
+      } else {
+        s.direction = Vector3(dir, "direction");
+      }
+      if (!(s.direction.norm() > 0.0)) throw InputError(At(dir), ctx + ": direction must not be the zero vector");
+      s.law = ParseLaw(Require(t, "law", ctx), ctx);
+      m.springs.push_back(std::move(s));
+    });
+    if (const toml::node* n = root.get("damping")) {
+      const toml::table& t = Table(*n, "damping");
+      CheckKeys(t, {"ratio", "ratios"}, "[damping]");
+      m.damping.ratio = NumberOr(t, "ratio", 0.0);
+      if (const toml::node* r = t.get("ratios")) m.damping.ratios = Numbers(*r, "ratios");
+      for (double r : m.damping.ratios)
+        if (!(r >= 0.0 && r < 1.0)) throw InputError(At(t), "[damping]: ratios must lie in [0, 1)");
+      if (!(m.damping.ratio >= 0.0 && m.damping.ratio < 1.0)) throw InputError(At(t), "[damping]: ratio must lie in [0, 1)");
+    }
+    std::set<int> ids;
+    each("point", [&](const toml::table& t) {
+      CheckKeys(t, {"id", "body", "node", "at"}, "[[point]]");
+      model::TestPoint p;
+      p.line = Line(t);
+      const toml::node& id = Require(t, "id", "[[point]]");
+      if (!id.is_integer() || *id.value<int64_t>() <= 0) throw InputError(At(id), "[[point]]: id must be a positive integer");
+      p.id = static_cast<int>(*id.value<int64_t>());
+      if (!ids.insert(p.id).second) throw InputError(At(t), "[[point]]: id " + std::to_string(p.id) + " appears twice");
+      p.where = AnchorFrom(t, "point " + std::to_string(p.id), true);
+      check_body(p.where, t, "point " + std::to_string(p.id));
+      m.points.push_back(p);
+    });
+    if (const toml::node* n = root.get("fe")) ReadFe(Table(*n, "fe"), &m);
+    each("setup", [&](const toml::table& t) {
+      CheckKeys(t, {"name", "operating", "description"}, "[[setup]]");
+      model::Setup s;
+      s.line = Line(t);
+      s.name = String(Require(t, "name", "[[setup]]"), "name");
+      if (const toml::node* o = t.get("operating"))
+        for (const auto& [k, v] : Table(*o, "operating")) s.operating[std::string(k.str())] = Number(v, std::string(k.str()));
+      m.setups.push_back(s);
+    });
+    each("effect", [&](const toml::table& t) {
+      CheckKeys(t, {"kind", "target", "law", "factor", "value", "mass", "k"}, "[[effect]]");
+      model::Effect e;
+      e.line = Line(t);
+      e.kind = String(Require(t, "kind", "[[effect]]"), "kind");
+      e.target = String(Require(t, "target", "[[effect]]"), "target");
+      for (const char* key : {"factor", "value", "mass", "k"})
+        if (auto v = OptNumber(t, key)) e.parameters[key] = *v;
+      if (const toml::node* l = t.get("law")) e.law = ParseLaw(*l, "effect " + e.kind);
+      m.effects.push_back(std::move(e));
+    });
+    return m;
+  }
+
+ private:
+  fs::path path_;
+  std::string file_;
+  fs::path dir_;
+};
+
+std::string Num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  std::string s(buf);
+  if (s.find_first_of(".eEni") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string Array(const std::vector<double>& v) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + Num(v[i]);
+  return s + "]";
+}
+
+}  // namespace
+
+model::Model ReadModelFile(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) throw InputError(path.string(), "model file not found");
+  return Reader(path).Read();
+}
+
+std::string LawToToml(const model::Law& law) {
+  std::string body;
+  if (const auto* l = std::get_if<model::LinearLaw>(&law.value)) {
+    body = "k = " + Num(l->k);
+  } else if (const auto* t = std::get_if<model::TableLaw>(&law.value)) {
+    body = "deflection = " + Array(t->deflection) + ", force = " + Array(t->force);
+    if (t->operating_deflection) body += ", operating_deflection = " + Num(*t->operating_deflection);
+    if (t->operating_force) body += ", operating_force = " + Num(*t->operating_force);
+  } else if (const auto* a = std::get_if<model::AirFilmLaw>(&law.value)) {
+    body = "gap = " + Array(a->gap) + ", load = " + Array(a->load) + ", operating_gap = " + Num(a->operating_gap);
+  } else if (const auto* h = std::get_if<model::HertzLaw>(&law.value)) {
+    body = "modulus = " + Num(h->modulus) + ", radius = " + Num(h->radius) + ", offset = " + Num(h->offset);
+    if (h->operating_deflection) body += ", deflection = " + Num(*h->operating_deflection);
+    if (h->operating_force) body += ", force = " + Num(*h->operating_force);
+  } else {
+    const auto& s = std::get<model::SeriesLaw>(law.value);
+    body = "elements = [";
+    for (std::size_t i = 0; i < s.elements.size(); ++i) body += (i ? ", " : "") + LawToToml(s.elements[i]);
+    body += "], setting = " + Num(s.setting);
+    if (s.force) body += ", force = " + Num(*s.force);
+  }
+  return "{ " + law.KindName() + " = { " + body + " } }";
+}
+
+std::string EffectToToml(const model::Effect& e) {
+  auto quote = [](const std::string& s) {
+    std::string q = "\"";
+    for (char c : s) q += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
+    return q + "\"";
+  };
+  std::string s = "[[effect]]\nkind = " + quote(e.kind) + "\ntarget = " + quote(e.target) + "\n";
+  for (const auto& [k, v] : e.parameters) s += k + " = " + Num(v) + "\n";
+  if (e.law) s += "law = " + LawToToml(*e.law) + "\n";
+  return s;
+}
+
+void WriteModelWithEffects(const std::filesystem::path& in_model, const std::filesystem::path& out,
+                           const std::vector<model::Effect>& effects) {
+  std::ifstream in(in_model, std::ios::binary);
+  if (!in) throw InputError(in_model.string(), "cannot open model file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  if (!s.empty() && s.back() != '\n') s += '\n';
+  for (const model::Effect& e : effects) {
+    s += '\n';
+    s += EffectToToml(e);
+  }
+  WriteTextFileAtomically(out, s);
+}
+
+}  // namespace ema::formats

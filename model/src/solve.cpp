@@ -1,0 +1,408 @@
+// Assembly of M and K at the operating point and the generalised eigenproblem K phi = w^2 M phi.
+#include "ema/model/solve.hpp"
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <Spectra/SymGEigsShiftSolver.h>
+#include <Spectra/MatOp/SparseSymMatProd.h>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <set>
+#include <iomanip>
+#include <sstream>
+
+#include "ema/core/error.hpp"
+#include "ema/model/effects.hpp"
+
+namespace ema::model {
+namespace {
+
+using Coeffs = std::vector<std::pair<int, double>>;
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+struct DofIndex {
+  std::map<std::string, int> body_offset;
+  std::map<std::pair<int, int>, int> fe;  // (node, dof 1..6) -> index
+  int body_dofs = 0;
+  int n = 0;
+};
+
+/// Displacement / rotation of an anchor as linear combinations of system DOFs.
+struct Kinematics {
+  std::array<Coeffs, 3> u;
+  std::array<Coeffs, 3> theta;
+  std::array<bool, 3> has_u{true, true, true};
+  std::array<bool, 3> has_theta{true, true, true};
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  bool ground = false;
+};
+
+DofIndex BuildIndex(const Model& model) {
+  DofIndex index;
+  for (const Body& b : model.bodies) {
+    if (b.name == kGround) throw InputError(model.Where(b.line), "body name 'ground' is reserved for the fixed support");
+    if (index.body_offset.count(b.name)) throw InputError(model.Where(b.line), "duplicate body name '" + b.name + "'");
+    index.body_offset[b.name] = index.n;
+    index.n += 6;
+  }
+  index.body_dofs = index.n;
+  const FeMatrices& fe = model.fe;
+  if (!fe.Empty()) {
+    const auto rows = static_cast<std::size_t>(fe.mass.rows());
+    if (fe.mass.rows() != fe.mass.cols() || fe.stiffness.rows() != fe.stiffness.cols() ||
+        fe.mass.rows() != fe.stiffness.rows())
+      throw InputError(fe.origin, "[fe] mass matrix is " + std::to_string(fe.mass.rows()) + "x" +
+                                      std::to_string(fe.mass.cols()) + " but stiffness is " +
+                                      std::to_string(fe.stiffness.rows()) + "x" + std::to_string(fe.stiffness.cols()));
+    if (fe.dofs.size() != rows)
+      throw InputError(fe.origin, "[fe] DOF map has " + std::to_string(fe.dofs.size()) +
+                                      " rows but the matrices have " + std::to_string(rows) + " rows");
+    for (std::size_t i = 0; i < fe.dofs.size(); ++i) {
+      const auto& d = fe.dofs[i];
+      if (d.dof < 1 || d.dof > 6)
+        throw InputError(fe.origin, "[fe] DOF map row " + std::to_string(i + 1) + ": dof " + std::to_string(d.dof) +
+                                        " not in 1..6");
+      if (!index.fe.emplace(std::make_pair(d.node, d.dof), index.n + static_cast<int>(i)).second)
+        throw InputError(fe.origin, "[fe] DOF map row " + std::to_string(i + 1) + ": node " + std::to_string(d.node) +
+                                        " dof " + std::to_string(d.dof) + " appears twice");
+    }
+    index.n += static_cast<int>(rows);
+  }
+  return index;
+}
+
+std::string BodyList(const Model& model) {
+  std::string s;
+  for (const Body& b : model.bodies) s += (s.empty() ? "" : ", ") + b.name;
+  return s + (s.empty() ? "" : ", ") + kGround;
+}
+
+Kinematics Resolve(const Model& model, const DofIndex& index, const Anchor& anchor, const Eigen::Vector3d* default_at,
+                   const std::string& where, const std::string& what) {
+  Kinematics k;
+  if (anchor.IsNode()) {
+    if (model.fe.Empty())
+      throw InputError(where, what + " refers to FE node " + std::to_string(anchor.node) + " but the model has no [fe]");
+    bool any = false;
+    for (int i = 0; i < 3; ++i) {
+      auto it = index.fe.find({anchor.node, i + 1});
+      k.has_u[i] = it != index.fe.end();
+      if (k.has_u[i]) k.u[i].push_back({it->second, 1.0}), any = true;
+      auto jt = index.fe.find({anchor.node, i + 4});
+      k.has_theta[i] = jt != index.fe.end();
+      if (k.has_theta[i]) k.theta[i].push_back({jt->second, 1.0}), any = true;
+    }
+    if (!any) throw InputError(where, what + " refers to FE node " + std::to_string(anchor.node) + ", which has no DOF in the [fe] DOF map");
+    auto pos = model.fe.node_positions.find(anchor.node);
+    if (pos != model.fe.node_positions.end()) k.position = pos->second;
+    return k;
+  }
+  if (anchor.IsGround()) {
+    k.ground = true;
+    k.position = anchor.has_at ? anchor.at : (default_at ? *default_at : Eigen::Vector3d::Zero());
+    return k;
+  }
+  auto it = index.body_offset.find(anchor.body);
+  if (it == index.body_offset.end())
+    throw InputError(where, what + " refers to unknown body '" + anchor.body + "' (known: " + BodyList(model) + ")");
+  const Body& body = *model.FindBody(anchor.body);
+  const int o = it->second;
+  k.position = anchor.has_at ? anchor.at : (default_at ? *default_at : body.centre);
+  const Eigen::Vector3d r = k.position - body.centre;
+  // u = u0 + theta x r
+  k.u[0] = {{o + 0, 1.0}, {o + 4, r.z()}, {o + 5, -r.y()}};
+  k.u[1] = {{o + 1, 1.0}, {o + 5, r.x()}, {o + 3, -r.z()}};
+  k.u[2] = {{o + 2, 1.0}, {o + 3, r.y()}, {o + 4, -r.x()}};
+  for (int i = 0; i < 3; ++i) k.theta[i] = {{o + 3 + i, 1.0}};
+  return k;
+}
+
+void AddOuter(double scale, const Coeffs& g, Triplets* t) {
+  for (const auto& [p, cp] : g)
+    for (const auto& [q, cq] : g) t->emplace_back(p, q, scale * cp * cq);
+}
+
+void AddPointMass(const Model& model, const DofIndex& index, const PointMass& pm, Triplets* t) {
+  const std::string where = model.Where(pm.line);
+  if (!(pm.mass >= 0.0) || !std::isfinite(pm.mass))
+    throw InputError(where, "mass '" + pm.name + "': mass must be >= 0, got " + std::to_string(pm.mass));
+  const Kinematics k = Resolve(model, index, pm.where, nullptr, where, "mass '" + pm.name + "'");
+  if (k.ground) return;  // a mass on the fixed support does not move
+  for (int i = 0; i < 3; ++i) AddOuter(pm.mass, k.u[i], t);
+}
+
+const Setup* FindSetup(const Model& model, const std::string& name) {
+  if (name.empty()) return nullptr;
+  for (const Setup& s : model.setups)
+    if (s.name == name) return &s;
+  std::string known;
+  for (const Setup& s : model.setups) known += (known.empty() ? "" : ", ") + s.name;
+  throw InputError(model.origin.empty() ? "model" : model.origin,
+                   "unknown setup '" + name + "' (setups: " + (known.empty() ? "none" : known) + ")");
+}
+
+}  // namespace
+
+System Assemble(const Model& model, const SolveOptions& options) {
+  const DofIndex index = BuildIndex(model);
+  const Setup* setup = FindSetup(model, options.setup);
+  if (setup) {
+    std::set<std::string> groups;
+    for (const Spring& s : model.springs) groups.insert(s.group);
+    for (const auto& [group, value] : setup->operating)
+      if (!groups.count(group)) {
+        std::string known;
+        for (const auto& g : groups) known += (known.empty() ? "" : ", ") + g;
+        throw InputError(model.Where(setup->line), "setup '" + setup->name + "': operating value for unknown spring group '" +
+                                                       group + "' (groups: " + known + ")");
+      }
+  }
+  System sys;
+  sys.body_dof_count = index.body_dofs;
+  const int n = index.n;
+  Triplets mt, kt;
+  for (const Body& b : model.bodies) {
+    const int o = index.body_offset.at(b.name);
+    const std::string where = model.Where(b.line);
+    if (!(b.mass >= 0.0) || !(b.inertia.minCoeff() >= 0.0))
+      throw InputError(where, "body '" + b.name + "': mass and inertia must be >= 0");
+    for (int i = 0; i < 3; ++i) mt.emplace_back(o + i, o + i, b.mass);
+    Eigen::Matrix3d j;
+    j << b.inertia.x(), -b.products.x(), -b.products.z(),  //
+        -b.products.x(), b.inertia.y(), -b.products.y(),   //
+        -b.products.z(), -b.products.y(), b.inertia.z();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        if (j(r, c) != 0.0) mt.emplace_back(o + 3 + r, o + 3 + c, j(r, c));
+    static const char* kDofNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+    for (int i = 0; i < 6; ++i) sys.dof_names.push_back(b.name + ":" + kDofNames[i]);
+  }
+  for (const PointMass& pm : model.masses) AddPointMass(model, index, pm, &mt);
+  for (const PointMass& pm : options.extra_masses) AddPointMass(model, index, pm, &mt);
+
+  for (const Spring& s : model.springs) {
+    const std::string where = model.Where(s.line);
+    const std::string what = "spring '" + s.name + "'";
+    const double norm = s.direction.norm();
+    if (!(norm > 0.0) || !std::isfinite(norm)) throw InputError(where, what + ": direction must be a non-zero vector");
+    const Eigen::Vector3d n_dir = s.direction / norm;
+    const Kinematics a = Resolve(model, index, s.a, nullptr, where, what + " end a");
+    const Kinematics b = Resolve(model, index, s.b, &a.position, where, what + " end b");
+    if (a.ground && b.ground) throw InputError(where, what + ": both ends on ground");
+    double override_value = kNaN;
+    if (setup) {
+      auto it = setup->operating.find(s.group);
+      if (it != setup->operating.end() && s.law.IsNonlinear()) override_value = it->second;
+    }
+    SpringState state = LinearizeLaw(s.law, where + ": " + what, override_value);
+    state.name = s.name;
+    state.group = s.group;
+    state.stiffness *= s.stiffness_factor;
+    Coeffs g;
+    const bool rot = s.kind == Spring::Kind::kRotational;
+    for (int i = 0; i < 3; ++i) {
+      if (n_dir[i] == 0.0) continue;
+      for (const Kinematics* end : {&a, &b}) {
+        const bool has = rot ? end->has_theta[i] : end->has_u[i];
+        if (!has)
+          throw InputError(where, what + ": FE node " + std::to_string(end == &a ? s.a.node : s.b.node) + " has no " +
+                                      (rot ? "rotation" : "translation") + " DOF " + std::to_string(i + (rot ? 4 : 1)));
+        const double sign = end == &a ? 1.0 : -1.0;
+        for (const auto& [dof, c] : (rot ? end->theta[i] : end->u[i])) g.emplace_back(dof, sign * n_dir[i] * c);
+      }
+    }
+    AddOuter(state.stiffness, g, &kt);
+    sys.springs.push_back(std::move(state));
+  }
+  if (!model.fe.Empty()) {
+    const int o = index.body_dofs;
+    for (const auto* src : {&model.fe.mass, &model.fe.stiffness}) {
+      Triplets& t = src == &model.fe.mass ? mt : kt;
+      for (int c = 0; c < src->outerSize(); ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(*src, c); it; ++it)
+          t.emplace_back(o + static_cast<int>(it.row()), o + static_cast<int>(it.col()), it.value());
+    }
+    for (std::size_t i = 0; i < model.fe.dofs.size(); ++i) {
+      static const char* kDofNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+      sys.dof_names.push_back("fe:" + std::to_string(model.fe.dofs[i].node) + ":" + kDofNames[model.fe.dofs[i].dof - 1]);
+    }
+  }
+  sys.mass.resize(n, n);
+  sys.mass.setFromTriplets(mt.begin(), mt.end());
+  sys.stiffness.resize(n, n);
+  sys.stiffness.setFromTriplets(kt.begin(), kt.end());
+
+  Triplets ot;
+  std::set<int> ids;
+  for (const TestPoint& p : model.points) {
+    const std::string where = model.Where(p.line);
+    if (!ids.insert(p.id).second) throw InputError(where, "test point id " + std::to_string(p.id) + " appears twice");
+    const Kinematics k = Resolve(model, index, p.where, nullptr, where, "point " + std::to_string(p.id));
+    const int row0 = static_cast<int>(sys.observed_dofs.size());
+    for (int i = 0; i < 3; ++i) {
+      sys.observed_dofs.push_back({p.id, i + 1});
+      for (const auto& [dof, c] : k.u[i]) ot.emplace_back(row0 + i, dof, c);
+    }
+    sys.geometry.push_back({p.id, k.position});
+  }
+  sys.observation.resize(static_cast<int>(sys.observed_dofs.size()), n);
+  sys.observation.setFromTriplets(ot.begin(), ot.end());
+  return sys;
+}
+
+namespace {
+
+/// (K - sigma M)^-1 x with a sparse LDL^T factorisation, for Spectra's shift-invert mode.
+class LdltShiftInvert {
+ public:
+  using Scalar = double;
+  LdltShiftInvert(const Eigen::SparseMatrix<double>& k, const Eigen::SparseMatrix<double>& m) : k_(k), m_(m) {}
+  Eigen::Index rows() const { return k_.rows(); }
+  Eigen::Index cols() const { return k_.cols(); }
+  void set_shift(double sigma) {
+    Eigen::SparseMatrix<double> a = k_ - sigma * m_;
+    solver_.compute(a);
+    if (solver_.info() != Eigen::Success) throw InputError("", "sparse factorisation of K - sigma M failed");
+  }
+  void perform_op(const double* x_in, double* y_out) const {
+    Eigen::Map<const Eigen::VectorXd> x(x_in, k_.rows());
+    Eigen::Map<Eigen::VectorXd> y(y_out, k_.rows());
+    y.noalias() = solver_.solve(x);
+  }
+
+ private:
+  const Eigen::SparseMatrix<double>& k_;
+  const Eigen::SparseMatrix<double>& m_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver_;
+};
+
+void CheckMassDiagonal(const System& sys, const std::string& origin) {
+  const Eigen::VectorXd diag = sys.mass.diagonal();
+  for (int i = 0; i < diag.size(); ++i)
+    if (!(diag[i] > 0.0))
+      throw InputError(origin, "singular mass matrix: DOF " + sys.dof_names[i] +
+                                   " has no mass or inertia (diagonal entry " + std::to_string(diag[i]) + ")");
+}
+
+}  // namespace
+
+Solution Solve(const Model& input, const SolveOptions& options) {
+  const Model applied = input.effects.empty() ? Model() : ApplyEffects(input);
+  const Model& model = input.effects.empty() ? input : applied;
+  const std::string origin = model.origin.empty() ? "model" : model.origin;
+  System sys = Assemble(model, options);
+  const int n = static_cast<int>(sys.mass.rows());
+  if (n == 0) throw InputError(origin, "the model has no degrees of freedom (no [[body]] and no [fe])");
+  CheckMassDiagonal(sys, origin);
+
+  Solution sol;
+  sol.springs = sys.springs;
+  sol.dof_names = sys.dof_names;
+  Eigen::VectorXd eigenvalues;
+  Eigen::MatrixXd vectors;
+  if (n < options.sparse_threshold) {
+    const Eigen::MatrixXd m(sys.mass), k(sys.stiffness);
+    Eigen::LLT<Eigen::MatrixXd> llt(m);
+    if (llt.info() != Eigen::Success)
+      throw InputError(origin, "singular mass matrix: M is not positive definite (a body with zero mass or inertia, "
+                               "or an FE mass matrix that is not positive definite)");
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(k, m, Eigen::ComputeEigenvectors | Eigen::Ax_lBx);
+    if (es.info() != Eigen::Success) throw InputError(origin, "eigenvalue solution failed");
+    eigenvalues = es.eigenvalues();
+    vectors = es.eigenvectors();  // M-normalised by Eigen
+  } else {
+    sol.sparse = true;
+    const int wanted = options.max_modes > 0 ? options.max_modes : 20;
+    const int nev = std::min(n - 1, wanted + 6);  // room for up to 6 rigid-body modes
+    const int ncv = std::min(n, std::max(2 * nev + 1, nev + 20));
+    // Shift slightly below zero so K - sigma M is definite even with rigid-body modes.
+    const double scale = sys.stiffness.diagonal().sum() / sys.mass.diagonal().sum();
+    const double sigma = -std::max(1.0, 1e-8 * scale);
+    LdltShiftInvert op(sys.stiffness, sys.mass);
+    Spectra::SparseSymMatProd<double> bop(sys.mass);
+    Spectra::SymGEigsShiftSolver<LdltShiftInvert, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert>
+        solver(op, bop, nev, ncv, sigma);
+    solver.init();
+    solver.compute(Spectra::SortRule::LargestMagn, 1000, 1e-10, Spectra::SortRule::SmallestAlge);
+    if (solver.info() != Spectra::CompInfo::Successful)
+      throw InputError(origin, "sparse eigenvalue solution did not converge");
+    eigenvalues = solver.eigenvalues();
+    vectors = solver.eigenvectors();
+  }
+  const double lambda_max = eigenvalues.cwiseAbs().maxCoeff();
+  const double rigid_limit = sol.sparse ? std::pow(kTwoPi * 1e-3, 2) : options.rigid_tolerance * lambda_max;
+  std::vector<int> elastic;
+  for (int i = 0; i < eigenvalues.size(); ++i) {
+    const double lam = eigenvalues[i];
+    if (lam < -rigid_limit)
+      throw InputError(origin, "negative eigenvalue " + std::to_string(lam) +
+                                   " (rad/s)^2: the stiffness matrix is not positive semi-definite");
+    if (lam <= rigid_limit) sol.rigid_body_frequencies_hz.push_back(std::sqrt(std::max(0.0, lam)) / kTwoPi);
+    else elastic.push_back(i);
+  }
+  if (options.max_modes > 0 && static_cast<int>(elastic.size()) > options.max_modes) elastic.resize(options.max_modes);
+
+  sol.full_shapes.resize(n, static_cast<int>(elastic.size()));
+  sol.modes.dofs = sys.observed_dofs;
+  sol.modes.geometry = sys.geometry;
+  sol.modes.source = (model.name.empty() ? origin : model.name) + (options.setup.empty() ? "" : " [" + options.setup + "]");
+  for (std::size_t j = 0; j < elastic.size(); ++j) {
+    const Eigen::VectorXd phi = vectors.col(elastic[j]);
+    sol.full_shapes.col(static_cast<int>(j)) = phi;
+    Mode mode;
+    mode.frequency_hz = std::sqrt(eigenvalues[elastic[j]]) / kTwoPi;
+    mode.damping_ratio = model.damping.RatioOfMode(static_cast<int>(j));
+    mode.pole = FrequencyAndDampingToPole(mode.frequency_hz, mode.damping_ratio);
+    mode.shape = (sys.observation * phi).cast<std::complex<double>>();
+    mode.mpc = 1.0;
+    mode.mpd = 0.0;
+    mode.unit_modal_mass = true;
+    sol.modes.modes.push_back(std::move(mode));
+  }
+  // Kinetic-energy shares: phi^T M_block phi per body (point masses belong to their body's block)
+  // and for the FE part; they sum to 1 for a mass-normalised mode.
+  const int nm = static_cast<int>(elastic.size());
+  const Eigen::MatrixXd mphi = sys.mass * sol.full_shapes;
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    EnergyShare e{model.bodies[b].name, std::vector<double>(nm)};
+    const int o = static_cast<int>(b) * 6;
+    for (int j = 0; j < nm; ++j) e.share[j] = sol.full_shapes.col(j).segment(o, 6).dot(mphi.col(j).segment(o, 6));
+    sol.energy.push_back(std::move(e));
+  }
+  if (!model.fe.Empty()) {
+    EnergyShare e{"fe", std::vector<double>(nm)};
+    const int o = sys.body_dof_count, len = n - o;
+    for (int j = 0; j < nm; ++j) e.share[j] = sol.full_shapes.col(j).segment(o, len).dot(mphi.col(j).segment(o, len));
+    sol.energy.push_back(std::move(e));
+  }
+  return sol;
+}
+
+std::string Explain(const Solution& sol) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(4);
+  out << "Springs (operating point and linearised stiffness):\n";
+  for (const SpringState& s : sol.springs) {
+    out << "  " << s.name << " [" << s.group << ", " << s.law << "]: force " << s.force << " N, compression "
+        << s.deflection * 1e6 << " um, k = " << s.stiffness * 1e-6 << " N/um\n";
+    if (!std::isnan(s.gap)) out << "    gap h = " << s.gap * 1e6 << " um\n";
+    for (std::size_t i = 0; i < s.element_deflections.size(); ++i)
+      out << "    element " << i + 1 << ": " << (std::isnan(s.gap) || s.element_deflections[i] != s.gap ? "compression " : "gap ")
+          << s.element_deflections[i] * 1e6 << " um, k = " << s.element_stiffnesses[i] * 1e-6 << " N/um\n";
+  }
+  out << "Rigid-body modes: " << sol.rigid_body_frequencies_hz.size() << "\n";
+  out << "Modes (kinetic-energy share per body, %):\n";
+  for (std::size_t j = 0; j < sol.modes.modes.size(); ++j) {
+    out << "  mode " << j + 1 << ": " << std::setprecision(2) << sol.modes.modes[j].frequency_hz << " Hz";
+    out.precision(1);
+    for (const EnergyShare& e : sol.energy) out << "  " << e.body << " " << 100.0 * e.share[j];
+    out.precision(4);
+    out << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace ema::model
