@@ -332,7 +332,9 @@ Solution Solve(const Model& input, const SolveOptions& options) {
     vectors = solver.eigenvectors();
   }
   const double lambda_max = eigenvalues.cwiseAbs().maxCoeff();
-  const double rigid_limit = sol.sparse ? std::pow(kTwoPi * 1e-3, 2) : options.rigid_tolerance * lambda_max;
+  // The sparse path only sees the lowest eigenvalues, so only the absolute limit applies there.
+  const double abs_limit = std::pow(kTwoPi * options.rigid_frequency_hz, 2);
+  const double rigid_limit = sol.sparse ? abs_limit : std::max(abs_limit, options.rigid_tolerance * lambda_max);
   std::vector<int> elastic;
   for (int i = 0; i < eigenvalues.size(); ++i) {
     const double lam = eigenvalues[i];

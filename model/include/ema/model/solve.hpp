@@ -20,9 +20,11 @@ struct SolveOptions {
   std::vector<PointMass> extra_masses;  ///< added for this solve only (roving sensors)
   /// Models with at least this many DOF use the sparse shift-invert solver.
   int sparse_threshold = 10000;
-  /// Eigenvalues below rigid_tolerance x the largest |eigenvalue| are rigid-body modes (dense),
-  /// and below (2 pi 1e-3 Hz)^2 in absolute terms for the sparse path.
-  double rigid_tolerance = 1e-9;
+  /// Rigid-body (zero) modes: eigenvalues below rigid_tolerance x the largest |eigenvalue|
+  /// (dense path: round-off of a zero eigenvalue is about 1e-16 of the largest), or below
+  /// (2 pi rigid_frequency_hz)^2.
+  double rigid_tolerance = 1e-12;
+  double rigid_frequency_hz = 1e-3;
 };
 
 /// The operating point and linearised stiffness of one spring (for --explain and diagnosis).

@@ -1,0 +1,240 @@
+// FE matrices through Matrix Market files and the sparse path; the model file reader/writer.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "ema/core/error.hpp"
+#include "ema/formats/matrix_market.hpp"
+#include "ema/formats/model_file.hpp"
+#include "ema/model/solve.hpp"
+#include "test_util.hpp"
+
+namespace ema::model {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Clamped Euler-Bernoulli cantilever of `elements` cubic Hermite elements (uz, ry per node),
+/// written as M.mtx, K.mtx, dofs.csv, nodes.csv and a model file; returns the model path.
+fs::path WriteCantilever(const fs::path& dir, int elements, double length, double ei, double rho_a) {
+  const int nodes = elements + 1, n = 2 * elements;  // node 0 clamped: its DOFs are removed
+  const double l = length / elements;
+  Eigen::Matrix4d ke, me;
+  ke << 12, 6 * l, -12, 6 * l, 6 * l, 4 * l * l, -6 * l, 2 * l * l, -12, -6 * l, 12, -6 * l, 6 * l, 2 * l * l, -6 * l,
+      4 * l * l;
+  ke *= ei / (l * l * l);
+  me << 156, 22 * l, 54, -13 * l, 22 * l, 4 * l * l, 13 * l, -3 * l * l, 54, 13 * l, 156, -22 * l, -13 * l, -3 * l * l,
+      -22 * l, 4 * l * l;
+  me *= rho_a * l / 420.0;
+  std::vector<Eigen::Triplet<double>> kt, mt;
+  for (int e = 0; e < elements; ++e)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        const int gi = 2 * e + i - 2, gj = 2 * e + j - 2;  // global index minus the clamped node
+        if (gi < 0 || gj < 0) continue;
+        kt.emplace_back(gi, gj, ke(i, j));
+        mt.emplace_back(gi, gj, me(i, j));
+      }
+  Eigen::SparseMatrix<double> k(n, n), m(n, n);
+  k.setFromTriplets(kt.begin(), kt.end());
+  m.setFromTriplets(mt.begin(), mt.end());
+  formats::WriteMatrixMarket(dir / "K.mtx", k);
+  formats::WriteMatrixMarket(dir / "M.mtx", m);
+  std::ofstream dofs(dir / "dofs.csv"), xyz(dir / "nodes.csv");
+  dofs << "node,dof\n";
+  xyz << "node,x,y,z\n";
+  for (int i = 1; i < nodes; ++i) dofs << i << ",3\n" << i << ",5\n";
+  for (int i = 0; i < nodes; ++i) xyz << i << "," << l * i << ",0,0\n";
+  dofs.close();
+  xyz.close();
+  return testing::WriteText(dir / "beam.toml",
+                            "[model]\nname = \"cantilever\"\n[fe]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n"
+                            "dofs = \"dofs.csv\"\nnodes = \"nodes.csv\"\n[[point]]\nid = 7\nnode = " +
+                                std::to_string(elements) + "\n");
+}
+
+TEST(FiniteElement, CantileverMatchesEulerBernoulliThroughSparsePath) {
+  const double length = 1.0, e = 210e9, b = 0.02, h = 0.01, rho = 7850.0;
+  const double ei = e * b * h * h * h / 12.0, rho_a = rho * b * h;
+  const fs::path path = WriteCantilever(testing::TempDir("cantilever"), 60, length, ei, rho_a);
+  const Model model = formats::ReadModelFile(path);
+  SolveOptions options;
+  options.max_modes = 4;
+  options.sparse_threshold = 10;  // force the shift-invert path on this 120-DOF model
+  const Solution sol = Solve(model, options);
+  EXPECT_TRUE(sol.sparse);
+  ASSERT_EQ(sol.modes.modes.size(), 4u);
+  EXPECT_TRUE(sol.rigid_body_frequencies_hz.empty());
+  const double beta_l[] = {1.87510407, 4.69409113, 7.85475744, 10.99554073};
+  for (int i = 0; i < 4; ++i) {
+    const double f = beta_l[i] * beta_l[i] / (length * length) * std::sqrt(ei / rho_a) / kTwoPi;
+    // Issue acceptance: 0.5 %. (60 cubic elements are far closer than that.)
+    EXPECT_NEAR(sol.modes.modes[i].frequency_hz, f, 0.005 * f) << "mode " << i + 1;
+  }
+  // Tip test point: +Z shape non-zero, +X/+Y zero (no such FE DOF); geometry from nodes.csv.
+  EXPECT_GT(std::abs(sol.modes.modes[0].shape[2].real()), 0.0);
+  EXPECT_EQ(sol.modes.modes[0].shape[0], std::complex<double>(0.0, 0.0));
+  ASSERT_EQ(sol.modes.geometry.size(), 1u);
+  EXPECT_NEAR(sol.modes.geometry[0].position.x(), 1.0, 1e-12);
+  // The dense path gives the same frequencies (1e-8 relative: both solve to round-off).
+  options.sparse_threshold = 100000;
+  const Solution dense = Solve(model, options);
+  EXPECT_FALSE(dense.sparse);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_NEAR(dense.modes.modes[i].frequency_hz, sol.modes.modes[i].frequency_hz, 1e-8 * dense.modes.modes[i].frequency_hz);
+}
+
+TEST(FiniteElement, DofMapNotMatchingMatrixFromFile) {
+  const fs::path dir = testing::TempDir("fe_bad");
+  const fs::path path = WriteCantilever(dir, 4, 1.0, 1.0, 1.0);
+  std::ofstream(dir / "dofs.csv") << "1,3\n1,5\n2,3\n";
+  try {
+    formats::ReadModelFile(path);
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string s = e.what();
+    EXPECT_NE(s.find("dofs.csv"), std::string::npos) << s;
+    EXPECT_NE(s.find("3 rows"), std::string::npos) << s;
+    EXPECT_NE(s.find("8 rows"), std::string::npos) << s;
+  }
+}
+
+TEST(MatrixMarket, TruncatedFileIsInputError) {
+  const fs::path p = testing::WriteText(testing::TempDir("mm") / "t.mtx",
+                                        "%%MatrixMarket matrix coordinate real symmetric\n3 3 3\n1 1 1.0\n2 2 1.0\n");
+  try {
+    formats::ReadMatrixMarket(p);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+}
+
+const char* kCarriage = R"([model]
+name = "pad"
+
+[[body]]
+name = "carriage"
+mass = 2.88
+inertia = [0.0117763, 0.0151621, 0.0104617]
+
+[[spring]]
+name = "B1"
+group = "bearings"
+a = { body = "carriage", at = [0.0624, 0.0, 0.0] }
+direction = [0.0, 0.0, 1.0]
+law = { series = { setting = 5.0e-6, elements = [ { air_film = { file = "film.csv" } }, { hertz = { modulus = 5e9, radius = 3e-3 } } ] } }
+
+[[spring]]
+name = "B2"
+group = "bearings"
+a = { body = "carriage", at = [-0.0624, 0.0, 0.0] }
+b = { body = "ground" }
+direction = "+Z"
+law = { linear = { k = 2.0e6 } }
+
+[[point]]
+id = 101
+body = "carriage"
+at = [0.06, 0.03, 0.03]
+
+[[setup]]
+name = "stud-9um"
+operating = { bearings = 9.0e-6 }
+)";
+
+fs::path WriteCarriage(const fs::path& dir, const std::string& text = kCarriage) {
+  std::ofstream film(dir / "film.csv");
+  film << "gap,load\n";
+  for (int i = 0; i <= 40; ++i) {
+    const double h = 1e-6 + 0.5e-6 * i;
+    film << h << "," << 400.0 * std::exp(-h / 4e-6) << "\n";
+  }
+  film.close();
+  return testing::WriteText(dir / "carriage.toml", text);
+}
+
+TEST(ModelFile, ReadsLawsAnchorsSetupsAndRelativeCurveFiles) {
+  const Model m = formats::ReadModelFile(WriteCarriage(testing::TempDir("file_ok")));
+  ASSERT_EQ(m.springs.size(), 2u);
+  EXPECT_EQ(m.springs[0].group, "bearings");
+  EXPECT_EQ(m.springs[0].line, 9);
+  EXPECT_EQ(m.springs[0].law.KindName(), "series");
+  EXPECT_EQ(m.springs[1].b.body, "ground");
+  EXPECT_EQ(m.springs[1].direction, Eigen::Vector3d::UnitZ());
+  ASSERT_EQ(m.setups.size(), 1u);
+  EXPECT_DOUBLE_EQ(m.setups[0].operating.at("bearings"), 9e-6);
+  // The chain solves: the gap opens beyond the 5 um setting; the 9 um setup is softer.
+  const System nominal = Assemble(m);
+  SolveOptions o;
+  o.setup = "stud-9um";
+  const System wide = Assemble(m, o);
+  EXPECT_GT(nominal.springs[0].gap, 5e-6);
+  EXPECT_GT(wide.springs[0].gap, 9e-6);
+  EXPECT_LT(wide.springs[0].stiffness, nominal.springs[0].stiffness);
+  EXPECT_DOUBLE_EQ(wide.springs[1].stiffness, 2e6) << "linear laws ignore setups";
+}
+
+TEST(ModelFile, UnknownKeyNamesLineAndAllowedKeys) {
+  std::string text = kCarriage;
+  text.replace(text.find("mass = 2.88"), 11, "masss = 2.88");
+  try {
+    formats::ReadModelFile(WriteCarriage(testing::TempDir("file_key"), text));
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string s = e.what();
+    EXPECT_NE(s.find("carriage.toml:6"), std::string::npos) << s;
+    EXPECT_NE(s.find("unknown key 'masss'"), std::string::npos) << s;
+    EXPECT_NE(s.find("allowed: centre, inertia, mass"), std::string::npos) << s;
+  }
+}
+
+TEST(ModelFile, SpringToUnknownBodyNamesSpringAndLine) {
+  std::string text = kCarriage;
+  const std::string from = "b = { body = \"ground\" }";
+  text.replace(text.find(from), from.size(), "b = { body = \"frame\" }");
+  try {
+    formats::ReadModelFile(WriteCarriage(testing::TempDir("file_body"), text));
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string s = e.what();
+    EXPECT_NE(s.find("carriage.toml:16"), std::string::npos) << s;
+    EXPECT_NE(s.find("spring 'B2'"), std::string::npos) << s;
+    EXPECT_NE(s.find("unknown body 'frame'"), std::string::npos) << s;
+  }
+}
+
+TEST(ModelFile, BadValueTypeNamesKey) {
+  std::string text = kCarriage;
+  text.replace(text.find("mass = 2.88"), 11, "mass = \"heavy\"");
+  try {
+    formats::ReadModelFile(WriteCarriage(testing::TempDir("file_type"), text));
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("key 'mass': expected a number"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ModelFile, WriteWithEffectsKeepsFileAndRoundTrips) {
+  const fs::path dir = testing::TempDir("file_effects");
+  const fs::path in = WriteCarriage(dir);
+  const fs::path out = dir / "updated.toml";
+  Effect series{"series_compliance", "bearings", {}, Law(LinearLaw{6.5e6}), 0};
+  Effect scale{"mass_scale", "carriage", {{"factor", 1.0625}}, std::nullopt, 0};
+  formats::WriteModelWithEffects(in, out, {series, scale});
+  std::ifstream a(in), b(out);
+  const std::string original((std::istreambuf_iterator<char>(a)), {}), updated((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_EQ(updated.substr(0, original.size()), original);
+  const Model m = formats::ReadModelFile(out);
+  ASSERT_EQ(m.effects.size(), 2u);
+  EXPECT_EQ(m.effects[0].kind, "series_compliance");
+  EXPECT_DOUBLE_EQ(std::get<LinearLaw>(m.effects[0].law->value).k, 6.5e6);
+  EXPECT_DOUBLE_EQ(m.effects[1].parameters.at("factor"), 1.0625);
+  // Solving the updated file applies its effects: lower frequencies than the original.
+  const Model original_model = formats::ReadModelFile(in);
+  EXPECT_LT(Solve(m).modes.modes[0].frequency_hz, Solve(original_model).modes.modes[0].frequency_hz);
+}
+
+}  // namespace
+}  // namespace ema::model
