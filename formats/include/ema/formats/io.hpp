@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "ema/core/types.hpp"
@@ -32,5 +33,28 @@ ModeSet ReadModeSet(const std::filesystem::path& path);
 
 /// Writes 151 header, 15 geometry (when known) and one 55 complex-mode dataset per mode.
 void WriteModeSet(const std::filesystem::path& path, const ModeSet& modes, const WriteOptions& options = {});
+
+/// CSV hammer-test time data (docs/formats.md): header names carry role, node and direction
+/// (`time`, `force:1:+Z`, `acc:101:+X`, optional `[unit]` suffix, optional `impact` column).
+/// ReadTimeRecords dispatches here for files that are not UFF.
+std::vector<TimeRecord> ReadCsvTimeRecords(const std::filesystem::path& path);
+
+/// Writes time records as CSV in the same convention (one `impact` column, records of one
+/// impact must share sample interval and length).
+void WriteCsvTimeRecords(const std::filesystem::path& path, const std::vector<TimeRecord>& records);
+
+/// One complex value per line, written as `(re+imj)` (Python repr), `re+imj`, `re` or `nan`;
+/// blank lines and lines starting with '#' are skipped; NaN allowed.
+Eigen::VectorXcd ReadComplexColumnText(const std::filesystem::path& path);
+
+/// Builds an FrfSet from one complex column file per reference (all with the same response
+/// DOF), on the grid f0_hz + i*df_hz. Every file must have the same number of lines.
+FrfSet FrfSetFromColumnTexts(const std::vector<std::filesystem::path>& files, const std::vector<Dof>& references,
+                             const Dof& output, double f0_hz, double df_hz,
+                             Quantity output_quantity = Quantity::kAcceleration);
+
+/// The shared measured beam data (`frf-meas-point/meas_point_{1,2,3}.txt` in `directory`):
+/// response node 1 +X, references 1, 2, 3 +X, 0..1000 Hz at 1 Hz, accelerance.
+FrfSet ReadMeasPointFrfs(const std::filesystem::path& directory);
 
 }  // namespace ema::formats
