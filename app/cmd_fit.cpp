@@ -1,7 +1,198 @@
+// ema fit — FRFs to modes (PolyMAX + stabilisation + automatic selection + LSFD, or peak picking).
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
 #include "cli.hpp"
+#include "ema/core/error.hpp"
+#include "ema/curvefit/fit.hpp"
+#include "ema/formats/atomic_file.hpp"
+#include "ema/formats/io.hpp"
+#include "plot_stabilisation.hpp"
 
 namespace ema {
 
-int RunFit(const std::vector<std::string>& /*args*/) { return cli::NotBuiltYet("fit", "issue 4"); }
+namespace {
+
+double ParseNumber(const std::string& text, const std::string& option) {
+  try {
+    size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument(text);
+    return v;
+  } catch (const std::exception&) {
+    throw UsageError(option + ": expected a number, got '" + text + "'");
+  }
+}
+
+nlohmann::json Complex(std::complex<double> v) { return nlohmann::json::array({v.real(), v.imag()}); }
+
+nlohmann::json NumberOrNull(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+nlohmann::json ModesJson(const ModeSet& set, const curvefit::FitResult& fit) {
+  nlohmann::json modes = nlohmann::json::array();
+  for (size_t r = 0; r < set.modes.size(); ++r) {
+    const Mode& m = set.modes[r];
+    nlohmann::json shape = nlohmann::json::array();
+    for (size_t d = 0; d < set.dofs.size(); ++d)
+      shape.push_back({{"node", set.dofs[d].node}, {"dir", DirectionName(set.dofs[d].direction)}, {"value", Complex(m.shape[d])}});
+    nlohmann::json participation = nlohmann::json::array();
+    for (int i = 0; i < m.participation.size(); ++i) participation.push_back(Complex(m.participation[i]));
+    nlohmann::json j = {{"frequency_hz", m.frequency_hz},
+                        {"damping_ratio", m.damping_ratio},
+                        {"mpc", NumberOrNull(m.mpc)},
+                        {"mpd_deg", NumberOrNull(m.mpd)},
+                        {"pole", Complex(m.pole)},
+                        {"frequency_spread_hz", NumberOrNull(m.frequency_spread_hz)},
+                        {"damping_spread", NumberOrNull(m.damping_spread)},
+                        {"unit_modal_mass", m.unit_modal_mass},
+                        {"participation", participation},
+                        {"shape", shape}};
+    if (r < fit.selected.size()) {
+      j["order"] = fit.selected[r].pole.order;
+      j["cluster_orders"] = fit.selected[r].cluster_size;
+    }
+    modes.push_back(j);
+  }
+  return {{"modes", modes}, {"synthesis_error", fit.synthesis_error}, {"reciprocity_transposed", fit.transposed}};
+}
+
+nlohmann::json StabilisationJson(const curvefit::FitResult& fit, const curvefit::StabilityOptions& stab) {
+  const auto& d = fit.diagram;
+  nlohmann::json orders = nlohmann::json::array();
+  for (const auto& order : d.orders) {
+    if (order.empty()) continue;
+    nlohmann::json poles = nlohmann::json::array();
+    for (const auto& p : order) {
+      nlohmann::json part = nlohmann::json::array();
+      for (int i = 0; i < p.participation.size(); ++i) part.push_back(Complex(p.participation[i]));
+      poles.push_back({{"frequency_hz", p.frequency_hz},
+                       {"damping_ratio", p.damping_ratio},
+                       {"pole", Complex(p.lambda)},
+                       {"label", std::string(1, p.label)},
+                       {"physical", p.physical},
+                       {"participation", part}});
+    }
+    orders.push_back({{"order", order.front().order}, {"poles", poles}});
+  }
+  nlohmann::json selected = nlohmann::json::array();
+  for (const auto& s : fit.selected)
+    selected.push_back({{"order", s.pole.order},
+                        {"frequency_hz", s.pole.frequency_hz},
+                        {"damping_ratio", s.pole.damping_ratio},
+                        {"frequency_spread_hz", NumberOrNull(s.frequency_spread_hz)},
+                        {"damping_spread", NumberOrNull(s.damping_spread)},
+                        {"cluster_orders", s.cluster_size}});
+  nlohmann::json mif = nlohmann::json::array();
+  for (int k = 0; k < d.frequency_hz.size(); ++k) mif.push_back({d.frequency_hz[k], d.sum_frf[k]});
+  return {{"band_hz", {d.band_lo_hz, d.band_hi_hz}},
+          {"references", d.references},
+          {"order_min", d.order_min},
+          {"order_max", d.order_max},
+          {"criteria", {{"frequency_tol", stab.frequency_tol}, {"damping_tol", stab.damping_tol}, {"mac_min", stab.mac_min}}},
+          {"labels", {{"s", "stable (frequency, damping, vector)"}, {"d", "frequency and damping"},
+                      {"v", "frequency and vector"}, {"f", "frequency"}, {"o", "new or unstable"}}},
+          {"orders", orders},
+          {"selected", selected},
+          {"sum_frf", mif}};
+}
+
+}  // namespace
+
+int RunFit(const std::vector<std::string>& args) {
+  namespace po = cli::po;
+  const std::string usage =
+      "ema fit FRF.unv -o MODES.unv [--band LO:HI] [--order-max N] [--select auto|F1,F2,...]\n"
+      "        [--json MODES.json] [--stabilisation STAB.json] [--plot STAB.svg|STAB.png] [--method polymax|peak]";
+  po::options_description options("ema fit: FRFs to modes (PolyMAX, stabilisation diagram, automatic selection, LSFD)");
+  std::string input, output, band, select = "auto", json_path, stab_path, plot_path, method = "polymax";
+  int order_max = 0, threads = 0;
+  curvefit::FitOptions fit_options;
+  options.add_options()
+      ("input", po::value(&input)->required(), "FRF file (UFF 58, function type 4), or a directory holding\n"
+                                               "meas_point_{1,2,3}.txt column texts")
+      ("output,o", po::value(&output)->required(), "mode shapes out (UFF 55 complex modes)")
+      ("band", po::value(&band), "analysis band LO:HI in Hz (default: all lines above DC)")
+      ("order-max", po::value(&order_max), "highest PolyMAX order (default: ceil(120/references), limited by the lines)")
+      ("select", po::value(&select), "auto (default) or a comma-separated list of frequencies in Hz")
+      ("json", po::value(&json_path), "modes as JSON (cli.md layout)")
+      ("stabilisation", po::value(&stab_path), "stabilisation diagram as JSON")
+      ("plot", po::value(&plot_path), "stabilisation diagram picture (.svg or .png)")
+      ("method", po::value(&method), "polymax (default) or peak (peak picking, half-power damping)")
+      ("freq-tol", po::value(&fit_options.stability.frequency_tol), "frequency stability tolerance (default 0.01)")
+      ("damping-tol", po::value(&fit_options.stability.damping_tol), "damping stability tolerance (default 0.05)")
+      ("mac-min", po::value(&fit_options.stability.mac_min), "vector stability: minimum MAC (default 0.98)")
+      ("threads", po::value(&threads), "threads for the per-order stage (default: all cores)");
+  cli::AddHelp(&options);
+  po::positional_options_description positional;
+  positional.add("input", 1);
+  po::variables_map vm;
+  if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+
+  if (method == "peak") fit_options.method = curvefit::FitMethod::kPeak;
+  else if (method != "polymax") throw UsageError("--method: expected polymax or peak, got '" + method + "'");
+  if (!band.empty()) {
+    const auto colon = band.find(':');
+    if (colon == std::string::npos) throw UsageError("--band: expected LO:HI in Hz, got '" + band + "'");
+    fit_options.data.band_lo_hz = ParseNumber(band.substr(0, colon), "--band");
+    fit_options.data.band_hi_hz = ParseNumber(band.substr(colon + 1), "--band");
+    if (!(fit_options.data.band_hi_hz > fit_options.data.band_lo_hz) || fit_options.data.band_lo_hz < 0.0)
+      throw UsageError("--band: expected 0 <= LO < HI, got '" + band + "'");
+  }
+  if (vm.count("order-max") && order_max < 1) throw UsageError("--order-max: expected a positive order");
+  fit_options.polymax.order_max = order_max;
+  fit_options.polymax.threads = threads;
+  if (select != "auto") {
+    std::stringstream ss(select);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      const double f = ParseNumber(item, "--select");
+      if (f <= 0.0) throw UsageError("--select: frequencies must be positive");
+      fit_options.select_frequencies_hz.push_back(f);
+    }
+    if (fit_options.select_frequencies_hz.empty()) throw UsageError("--select: expected auto or F1,F2,...");
+  }
+  if (!plot_path.empty() && !IsSupportedPlotPath(plot_path))
+    throw UsageError("--plot: expected a .svg or .png file name, got '" + plot_path + "'");
+  if (fit_options.method == curvefit::FitMethod::kPeak && (!stab_path.empty() || !plot_path.empty()))
+    throw UsageError("--stabilisation and --plot need --method polymax");
+
+  // A directory is read as column-text FRFs (the frf-meas-point layout, see formats/io.hpp).
+  const FrfSet frfs = std::filesystem::is_directory(input) ? formats::ReadMeasPointFrfs(input) : formats::ReadFrfSet(input);
+  curvefit::FitResult fit;
+  try {
+    fit = curvefit::Fit(frfs, fit_options, input, [](double f, std::string_view stage) {
+      cli::DrawProgress(f, std::string(stage));
+    });
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    if (what.rfind(input, 0) == 0) throw;
+    throw InputError(input, what);
+  }
+  for (const auto& w : fit.warnings) std::cerr << "warning: " << w << "\n";
+
+  fit.modes.source = input;
+  formats::WriteModeSet(output, fit.modes);
+  if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, ModesJson(fit.modes, fit).dump(2) + "\n");
+  if (!stab_path.empty())
+    formats::WriteTextFileAtomically(stab_path, StabilisationJson(fit, fit_options.stability).dump(1) + "\n");
+  if (!plot_path.empty()) PlotStabilisation(plot_path, fit.diagram, fit.selected);
+
+  std::cout << fit.modes.modes.size() << " mode(s) from " << input << " ("
+            << (fit_options.method == curvefit::FitMethod::kPeak ? "peak picking" : "PolyMAX");
+  if (fit.transposed) std::cout << ", roving hammer fitted by reciprocity";
+  std::cout << ")\n";
+  std::cout << "  #   f [Hz]      zeta [%]   spread f [Hz]  spread zeta [%]  MPC     MPD [deg]\n";
+  for (size_t r = 0; r < fit.modes.modes.size(); ++r) {
+    const Mode& m = fit.modes.modes[r];
+    std::cout << std::setw(3) << r + 1 << std::fixed << std::setprecision(3) << std::setw(11) << m.frequency_hz
+              << std::setw(12) << 100.0 * m.damping_ratio << std::setw(14) << m.frequency_spread_hz << std::setw(16)
+              << 100.0 * m.damping_spread << std::setw(9) << m.mpc << std::setw(11) << std::setprecision(1) << m.mpd
+              << "\n";
+  }
+  return 0;
+}
 
 }  // namespace ema

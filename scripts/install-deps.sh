@@ -4,7 +4,8 @@
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libfftw3-dev libceres-dev
           libboost-program-options-dev libgtest-dev libgmock-dev libtomlplusplus-dev
-          nlohmann-json3-dev libspectra-dev libbenchmark-dev nodejs npm)
+          nlohmann-json3-dev libspectra-dev libbenchmark-dev nodejs npm
+          libplplot-dev plplot-driver-cairo)
 if [[ "${1:-}" == "--test" ]]; then
   packages+=(chromium clang)
 fi
