@@ -13,8 +13,9 @@ namespace ema::acquisition {
 namespace {
 
 std::string Origin(const RecordSet& set, const TimeRecord& r, size_t index) {
-  if (!r.origin.empty()) return r.origin;
-  return set.name + ", record " + std::to_string(index + 1);
+  if (r.origin.empty()) return set.name + ", record " + std::to_string(index + 1);
+  if (set.name.empty() || r.origin.find(set.name) != std::string::npos) return r.origin;
+  return set.name + ", " + r.origin;  // messages always name the file
 }
 
 bool LooksLikeForceUnit(const std::string& unit) {
@@ -151,7 +152,7 @@ HammerTest AssembleHammerTest(std::vector<RecordSet> sets) {
         r.quantity = Quantity::kAcceleration;
         test.notes.push_back(Origin(set, r, 0) + ": unknown response quantity, assumed acceleration");
       }
-      if (r.origin.empty()) r.origin = set.name;
+      r.origin = Origin(set, r, &r - set.records.data());
       test.records.push_back(std::move(r));
     }
     test.set_names.push_back(set.name);

@@ -171,12 +171,17 @@ ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& opt) {
               Format(" was moving before the impact: pre-trigger rms %.1f %% of its peak (limit %.1f %%)",
                      100.0 * pre_rms / rpeak, 100.0 * opt.pretrigger_motion);
       if (why.empty() && rpeak <= 0.0) why = "response " + DofName(r.channel) + " is identically zero";
-      // Envelope at the end: rms of the last 5 % less the noise (pre-trigger) rms, × sqrt 2.
-      const double end_rms = Rms(x, n - tail, n, dc);
+      // Envelope at the end relative to the strongest part of the decay, both as rms over blocks of
+      // 5 % of the record (a block rms is not fooled by the few-sample acceleration spike at the
+      // impact, which would make a ringing mode look small against the peak); noise rms removed.
       const double noise = pre_end >= 8 ? pre_rms : 0.0;
-      const double end_amp = std::sqrt(2.0 * std::max(0.0, end_rms * end_rms - noise * noise));
+      double ref_rms = 0.0;
+      for (int b = trig; b + tail <= n; b += tail) ref_rms = std::max(ref_rms, Rms(x, b, b + tail, dc));
+      const double end_rms = Rms(x, n - tail, n, dc);
+      const double end_amp = std::sqrt(std::max(0.0, end_rms * end_rms - noise * noise));
+      const double ref_amp = std::sqrt(std::max(0.0, ref_rms * ref_rms - noise * noise));
       a.response_dc.push_back(dc);
-      a.response_end_level.push_back(rpeak > 0.0 ? end_amp / rpeak : 0.0);
+      a.response_end_level.push_back(ref_amp > 0.0 ? end_amp / ref_amp : 0.0);
       a.response_rejections.push_back(why);
     }
   }
@@ -205,23 +210,23 @@ ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& opt) {
     case ExpWindowMode::kNone: out.decay_rate = 0.0; break;
     case ExpWindowMode::kFixed: out.decay_rate = opt.exp_decay_rate; break;
     case ExpWindowMode::kAuto: {
-      double rate = 0.0, worst = 0.0;
+      // Needed when a kept response still rings above the end level; then the window itself
+      // falls to the end level at the record end, tau = -(T - t0)/ln(end level) (spec §1.4), so
+      // every mode's tail ends at most at that fraction of where it would have ended.
+      double worst = 0.0, span = record_t;
       for (size_t k = 0; k < test.impacts.size(); ++k) {
         const ImpactAnalysis& a = out.impacts[k];
         if (!a.accepted) continue;
-        const double span = record_t - a.trigger_index * dt;
-        for (size_t j = 0; j < a.response_end_level.size(); ++j) {
-          if (!a.response_rejections[j].empty()) continue;
-          const double e = a.response_end_level[j];
-          worst = std::max(worst, e);
-          if (e > opt.exp_end_level && span > 0.0) rate = std::max(rate, std::log(e / opt.exp_end_level) / span);
-        }
+        span = std::min(span, record_t - a.trigger_index * dt);
+        for (size_t j = 0; j < a.response_end_level.size(); ++j)
+          if (a.response_rejections[j].empty()) worst = std::max(worst, a.response_end_level[j]);
       }
-      out.decay_rate = rate;
-      if (rate > 0.0)
-        out.notes.push_back(Format("responses end at up to %.1f %% of their peak: exponential window 1/tau = %.4g 1/s "
-                                   "applied (poles shifted left by it; the fit removes it)",
-                                   100.0 * worst, rate));
+      out.decay_rate = worst > opt.exp_end_level && span > 0.0 ? -std::log(opt.exp_end_level) / span : 0.0;
+      if (out.decay_rate > 0.0)
+        out.notes.push_back(Format("responses still ring at up to %.1f %% of their level at the record end: "
+                                   "exponential window 1/tau = %.4g 1/s applied (poles shifted left by it; the fit "
+                                   "removes it)",
+                                   100.0 * worst, out.decay_rate));
       break;
     }
   }

@@ -99,15 +99,17 @@ Eigen::VectorXcd AnalyticFrfShifted(const ModalTruth& truth, const Dof& out, con
   const int k = quantity == Quantity::kDisplacement ? 0 : quantity == Quantity::kVelocity ? 1 : 2;
   Eigen::VectorXcd h(frequency_hz.size());
   for (Eigen::Index f = 0; f < frequency_hz.size(); ++f) {
-    const cd jw(0.0, kTwoPi * frequency_hz[f]);
+    // The windowed FRF is the FRF evaluated at s = jw + decay_rate: poles shifted left, and the
+    // (jw)^k of a velocity/acceleration FRF becomes (jw + decay_rate)^k as well.
+    const cd s(decay_rate, kTwoPi * frequency_hz[f]);
     cd alpha = 0.0;
     for (size_t r = 0; r < truth.poles.size(); ++r) {
       const cd a = truth.ModalA(static_cast<int>(r));
-      const cd lambda = truth.poles[r] - decay_rate;
+      const cd lambda = truth.poles[r];
       const cd res = truth.shapes[r][i] * truth.shapes[r][j] / a;
-      alpha += res / (jw - lambda) + std::conj(res) / (jw - std::conj(lambda));
+      alpha += res / (s - lambda) + std::conj(res) / (s - std::conj(lambda));
     }
-    h[f] = alpha * std::pow(jw, k);
+    h[f] = alpha * std::pow(s, k);
   }
   return h;
 }

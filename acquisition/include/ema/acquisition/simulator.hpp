@@ -40,8 +40,10 @@ Eigen::MatrixXcd ReceptanceMatrix(const ModalTruth& truth, double w);
 Eigen::VectorXcd AnalyticFrf(const ModalTruth& truth, const Dof& out, const Dof& ref,
                              const Eigen::VectorXd& frequency_hz, Quantity quantity = Quantity::kAcceleration);
 
-/// Same as AnalyticFrf with every pole moved left by `decay_rate` (1/s): the FRF an exponential
-/// window e^{-decay_rate t} applied to force and response measures (spec §1.4).
+/// The FRF an exponential window e^{-decay_rate t} on force and response measures (spec §1.4):
+/// H(jw + decay_rate), i.e. every pole moved left by decay_rate, receptance residues unchanged,
+/// and for mobility/accelerance the factor (jw)^k evaluated at jw + decay_rate too (so a fit of
+/// windowed accelerance finds residues lambda_r^2 R_r with the *uncorrected* lambda_r).
 Eigen::VectorXcd AnalyticFrfShifted(const ModalTruth& truth, const Dof& out, const Dof& ref,
                                     const Eigen::VectorXd& frequency_hz, double decay_rate,
                                     Quantity quantity = Quantity::kAcceleration);
