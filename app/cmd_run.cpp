@@ -1,7 +1,372 @@
+// ema run PROJECT.toml [-o OUTDIR]: the whole story — frf → fit → correlate (before) → diagnose →
+// correlate (after) — with every intermediate file kept in OUTDIR, a one-screen summary and the
+// self-contained HTML report (OUTDIR/report.html).
+//
+// Each step calls the matching subcommand's entry point in this process (RunFrf, RunFit, ...) with
+// the arguments a user would type, so every file a step writes is exactly what that subcommand
+// writes, and its stdout goes to OUTDIR/logs/<step>.txt. A failed step is reported, the steps that
+// depend on it are skipped, the report is still written with what exists, and the exit code is 1.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
 #include "cli.hpp"
+#include "ema/core/error.hpp"
+#include "ema/formats/atomic_file.hpp"
+#include "ema/formats/io.hpp"
+#include "project_file.hpp"
+#include "report.hpp"
 
 namespace ema {
 
-int RunRun(const std::vector<std::string>& /*args*/) { return cli::NotBuiltYet("run", "issue 8"); }
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+// Runs the pipeline's steps, captures their stdout, keeps the list of problems and files.
+class StepRunner {
+ public:
+  StepRunner(fs::path out, int total_steps) : out_(std::move(out)), total_(total_steps) {}
+
+  /// Runs `command` (a subcommand entry point) with `args`; true when it returned 0.
+  bool Run(const std::string& label, const std::string& log_name,
+           int (*command)(const std::vector<std::string>&), const std::vector<std::string>& args) {
+    cli::DrawProgress(static_cast<double>(done_) / total_, label);
+    std::ostringstream captured;
+    int code = 1;
+    std::string failure;
+    {
+      std::streambuf* previous = std::cout.rdbuf(captured.rdbuf());
+      try {
+        code = command(args);
+        if (code != 0) failure = "exit code " + std::to_string(code);
+      } catch (const std::exception& e) {
+        failure = e.what();
+      }
+      std::cout.rdbuf(previous);
+    }
+    std::string log = "$ ema";
+    for (const std::string& a : args) log += " " + a;
+    log += "\n" + captured.str();
+    if (!failure.empty()) log += "\nFAILED: " + failure + "\n";
+    const fs::path log_path = out_ / "logs" / (log_name + ".txt");
+    try {
+      formats::WriteTextFileAtomically(log_path, log);
+    } catch (const std::exception&) {
+      // The log is a convenience; the step's own outputs and the problem list matter more.
+    }
+    ++done_;
+    if (!failure.empty()) {
+      if (cli::StderrIsTerminal()) std::fprintf(stderr, "\n");
+      std::cerr << "ema run: " << label << " failed: " << failure << "\n";
+      problems_.push_back(label + ": " + failure + " (log: " + log_path.string() + ")");
+      return false;
+    }
+    return true;
+  }
+
+  void Skip(const std::string& label, const std::string& why) {
+    ++done_;
+    problems_.push_back(label + ": skipped (" + why + ")");
+  }
+  void Advance() { ++done_; }
+  void Problem(const std::string& text) { problems_.push_back(text); }
+  void Progress(const std::string& label) { cli::DrawProgress(static_cast<double>(done_) / total_, label); }
+  void Finish() { cli::DrawProgress(1.0, "done"); }
+  const std::vector<std::string>& problems() const { return problems_; }
+
+ private:
+  fs::path out_;
+  int total_ = 1;
+  int done_ = 0;
+  std::vector<std::string> problems_;
+};
+
+json LoadJson(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return json();
+  try {
+    return json::parse(in);
+  } catch (const std::exception&) {
+    return json();
+  }
+}
+
+std::string Fixed(double value, int digits) {
+  if (!std::isfinite(value)) return "-";
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", digits, value);
+  return text;
+}
+
+double Get(const json& j, std::initializer_list<const char*> keys) {
+  const json* node = &j;
+  for (const char* key : keys) {
+    if (!node->is_object() || !node->contains(key)) return kNaN;
+    node = &(*node)[key];
+  }
+  return node->is_number() ? node->get<double>() : kNaN;
+}
+
+std::string ParametersText(const json& parameters) {
+  if (!parameters.is_object()) return "";
+  std::string out;
+  for (const auto& [key, value] : parameters.items()) {
+    if (!out.empty()) out += ", ";
+    out += key + " = ";
+    if (value.is_number()) {
+      char text[64];
+      std::snprintf(text, sizeof text, "%.4g", value.get<double>());
+      out += text;
+    } else {
+      out += value.dump();
+    }
+  }
+  return out;
+}
+
+// Per-test file names inside OUTDIR/<test>/.
+struct TestFiles {
+  fs::path dir, frf, frf_json, modes, modes_json, stabilisation, model_before, model_before_json, corr_before,
+      corr_before_table, model_after, model_after_json, corr_after, corr_after_table;
+  explicit TestFiles(const fs::path& d)
+      : dir(d),
+        frf(d / "frf.unv"),
+        frf_json(d / "frf.json"),
+        modes(d / "modes.unv"),
+        modes_json(d / "modes.json"),
+        stabilisation(d / "stabilisation.json"),
+        model_before(d / "model-before.unv"),
+        model_before_json(d / "model-before.json"),
+        corr_before(d / "correlation-before.json"),
+        corr_before_table(d / "correlation-before.md"),
+        model_after(d / "model-after.unv"),
+        model_after_json(d / "model-after.json"),
+        corr_after(d / "correlation-after.json"),
+        corr_after_table(d / "correlation-after.md") {}
+};
+
+std::string Stamp() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  char text[64];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
+  return text;
+}
+
+}  // namespace
+
+int RunRun(const std::vector<std::string>& args) {
+  namespace po = cli::po;
+  po::options_description options("ema run options");
+  cli::AddHelp(&options);
+  options.add_options()
+      ("project", po::value<std::string>()->required(), "project file (TOML, docs/project-file.md)")
+      ("output,o", po::value<std::string>()->default_value("ema-run"), "output folder (created; files in it are replaced)")
+      ("no-report", "skip the HTML report");
+  po::positional_options_description positional;
+  positional.add("project", 1);
+  po::variables_map vm;
+  if (!cli::Parse(args, "ema run PROJECT.toml [-o OUTDIR]", options, positional, &vm)) return 0;
+
+  const app::Project project = app::ReadProjectFile(vm["project"].as<std::string>());
+  const fs::path out = vm["output"].as<std::string>();
+  std::error_code ec;
+  fs::create_directories(out / "logs", ec);
+  if (ec) throw InputError(out.string(), "cannot create the output folder: " + ec.message());
+  for (const app::ProjectTest& test : project.tests) fs::create_directories(out / test.name);
+
+  const fs::path diagnosis_json = out / "diagnosis.json", updated_model = out / "updated-model.toml";
+  const int steps_per_test = 6;  // frf, fit, model, correlate, model (after), correlate (after)
+  StepRunner runner(out, steps_per_test * static_cast<int>(project.tests.size()) + 2);
+  const std::string model = project.model.string();
+  std::vector<std::string> fit_ok;  // tests whose modes exist
+  std::vector<std::string> files;
+
+  // frf → fit → model → correlate (before), per test.
+  for (const app::ProjectTest& test : project.tests) {
+    const TestFiles f(out / test.name);
+    const std::string tag = test.name + ": ";
+    bool have_frf = true;
+    fs::path frf_path = f.frf;
+    if (test.frf) {
+      frf_path = *test.frf;
+      runner.Advance();  // the project gives FRFs: nothing to estimate
+    } else {
+      std::vector<std::string> a;
+      for (const fs::path& t : test.time) a.push_back(t.string());
+      a.insert(a.end(), {"-o", f.frf.string(), "--estimator", project.estimator, "--json", f.frf_json.string()});
+      have_frf = runner.Run(tag + "frf", test.name + "-frf", RunFrf, a);
+    }
+    bool have_modes = false;
+    if (have_frf) {
+      std::vector<std::string> a = {frf_path.string(), "-o", f.modes.string(), "--json", f.modes_json.string(),
+                                    "--stabilisation", f.stabilisation.string(), "--select", project.select};
+      if (project.band_hz) a.insert(a.end(), {"--band", Fixed(project.band_hz->first, 3) + ":" + Fixed(project.band_hz->second, 3)});
+      if (project.order_max) a.insert(a.end(), {"--order-max", std::to_string(*project.order_max)});
+      a.insert(a.end(), project.fit_extra.begin(), project.fit_extra.end());
+      have_modes = runner.Run(tag + "fit", test.name + "-fit", RunFit, a);
+    } else {
+      runner.Skip(tag + "fit", "no FRFs");
+    }
+    std::vector<std::string> setup;
+    if (!test.setup.empty()) setup = {"--setup", test.setup};
+    std::vector<std::string> a = {model, "-o", f.model_before.string(), "--json", f.model_before_json.string()};
+    a.insert(a.end(), setup.begin(), setup.end());
+    runner.Run(tag + "model (nominal)", test.name + "-model-before", RunModel, a);
+    if (have_modes) {
+      fit_ok.push_back(test.name);
+      a = {f.modes.string(), model, "--json", f.corr_before.string(), "--table", f.corr_before_table.string()};
+      a.insert(a.end(), setup.begin(), setup.end());
+      runner.Run(tag + "correlate (nominal)", test.name + "-correlate-before", RunCorrelate, a);
+    } else {
+      runner.Skip(tag + "correlate (nominal)", "no test modes");
+    }
+  }
+
+  // diagnose, all tests at once.
+  bool have_update = false;
+  if (!fit_ok.empty()) {
+    std::vector<std::string> a = {model};
+    for (const app::ProjectTest& test : project.tests) {
+      if (std::find(fit_ok.begin(), fit_ok.end(), test.name) == fit_ok.end()) continue;
+      const TestFiles f(out / test.name);
+      a.push_back("--test");
+      a.push_back((test.setup.empty() ? std::string() : test.setup + "=") + f.modes.string());
+    }
+    a.insert(a.end(), {"--json", diagnosis_json.string(), "-o", updated_model.string()});
+    a.insert(a.end(), project.diagnose_extra.begin(), project.diagnose_extra.end());
+    have_update = runner.Run("diagnose", "diagnose", RunDiagnose, a) && fs::exists(updated_model);
+  } else {
+    runner.Skip("diagnose", "no test modes");
+  }
+
+  // model → correlate (after), per test.
+  for (const app::ProjectTest& test : project.tests) {
+    const TestFiles f(out / test.name);
+    const std::string tag = test.name + ": ";
+    if (!have_update) {
+      runner.Skip(tag + "model (updated)", "no updated model");
+      runner.Skip(tag + "correlate (updated)", "no updated model");
+      continue;
+    }
+    std::vector<std::string> setup;
+    if (!test.setup.empty()) setup = {"--setup", test.setup};
+    std::vector<std::string> a = {updated_model.string(), "-o", f.model_after.string(), "--json", f.model_after_json.string()};
+    a.insert(a.end(), setup.begin(), setup.end());
+    runner.Run(tag + "model (updated)", test.name + "-model-after", RunModel, a);
+    if (std::find(fit_ok.begin(), fit_ok.end(), test.name) == fit_ok.end()) {
+      runner.Skip(tag + "correlate (updated)", "no test modes");
+      continue;
+    }
+    a = {f.modes.string(), updated_model.string(), "--json", f.corr_after.string(), "--table", f.corr_after_table.string()};
+    a.insert(a.end(), setup.begin(), setup.end());
+    runner.Run(tag + "correlate (updated)", test.name + "-correlate-after", RunCorrelate, a);
+  }
+
+  // Summary.
+  const json diagnosis = LoadJson(diagnosis_json);
+  std::vector<std::string> summary;
+  summary.push_back("ema run: " + project.name + "  (" + project.file.filename().string() + ", model " +
+                    project.model.filename().string() + ")");
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-12s %5s %8s %6s  %-22s %-22s", "test", "FRFs", "rejected", "modes",
+                "nominal: agree / MAC", "updated: agree / MAC");
+  summary.push_back(line);
+  report::ReportInput input;
+  for (const app::ProjectTest& test : project.tests) {
+    const TestFiles f(out / test.name);
+    report::SetupResults s;
+    s.name = test.name;
+    s.frf_summary = LoadJson(f.frf_json);
+    s.stabilisation = LoadJson(f.stabilisation);
+    s.test_modes = LoadJson(f.modes_json);
+    s.model_modes_before = LoadJson(f.model_before_json);
+    s.model_modes_after = LoadJson(f.model_after_json);
+    s.correlation_before = LoadJson(f.corr_before);
+    s.correlation_after = LoadJson(f.corr_after);
+    s.geometry = app::ReadModelPoints(project.model);
+    s.lines = project.lines;
+    if (project.band_hz) {
+      s.band_lo_hz = project.band_hz->first;
+      s.band_hi_hz = project.band_hz->second;
+    }
+    const fs::path frf_path = test.frf ? *test.frf : f.frf;
+    if (fs::exists(frf_path)) {
+      try {
+        s.frfs = formats::ReadFrfSet(frf_path);
+      } catch (const std::exception& e) {
+        runner.Problem("report: cannot read " + frf_path.string() + ": " + e.what());
+      }
+    }
+    int frf_count = 0, rejected = 0;
+    if (s.frf_summary.contains("frfs") && s.frf_summary["frfs"].is_array()) {
+      frf_count = static_cast<int>(s.frf_summary["frfs"].size());
+      for (const json& r : s.frf_summary["frfs"])
+        if (r.contains("rejected") && r["rejected"].is_array()) rejected += static_cast<int>(r["rejected"].size());
+    } else if (s.frfs) {
+      frf_count = s.frfs->OutputCount() * s.frfs->ReferenceCount();
+    }
+    const int modes = s.test_modes.contains("modes") ? static_cast<int>(s.test_modes["modes"].size()) : 0;
+    const std::string before = Fixed(Get(s.correlation_before, {"summary", "mean_agreement_pct"}), 1) + " % / " +
+                               Fixed(Get(s.correlation_before, {"summary", "mean_mac"}), 3);
+    const std::string after = Fixed(Get(s.correlation_after, {"summary", "mean_agreement_pct"}), 1) + " % / " +
+                              Fixed(Get(s.correlation_after, {"summary", "mean_mac"}), 3);
+    std::snprintf(line, sizeof line, "  %-12s %5d %8d %6d  %-22s %-22s", test.name.c_str(), frf_count, rejected, modes,
+                  before.c_str(), after.c_str());
+    summary.push_back(line);
+    input.setups.push_back(std::move(s));
+  }
+  if (diagnosis.contains("candidates") && diagnosis["candidates"].is_array() && !diagnosis["candidates"].empty()) {
+    const double base = Get(diagnosis, {"baseline", "mean_abs_frequency_error_pct"});
+    int shown = 0;
+    for (const json& c : diagnosis["candidates"]) {
+      if (shown == 3) break;
+      const int rank = c.value("rank", shown + 1);
+      std::string text = "  " + std::string(rank == 1 ? "diagnosis: " : "           ") + "#" + std::to_string(rank) + " " +
+                         c.value("kind", std::string("?"));
+      if (c.contains("target") && c["target"].is_string()) text += " on '" + c["target"].get<std::string>() + "'";
+      const std::string params = ParametersText(c.value("parameters", json()));
+      if (!params.empty()) text += " (" + params + ")";
+      text += ": mean |f error| " + Fixed(base, 2) + " % -> " + Fixed(Get(c, {"mean_abs_frequency_error_pct"}), 2) + " %";
+      summary.push_back(text);
+      ++shown;
+    }
+  }
+  const fs::path report_path = out / "report.html";
+  if (!vm.count("no-report")) summary.push_back("  report: " + report_path.string());
+  summary.push_back("  every intermediate file: " + out.string() + "/  (logs/ holds each step's output)");
+
+  if (!vm.count("no-report")) {
+    runner.Progress("report");
+    input.title = project.title;
+    input.subtitle = project.file.filename().string() + " · model " + project.model.filename().string() + " · " + Stamp();
+    input.summary = summary;
+    input.diagnosis = diagnosis;
+    input.problems = runner.problems();
+    for (const auto& entry : fs::recursive_directory_iterator(out)) {
+      if (!entry.is_regular_file()) continue;
+      const std::string name = fs::relative(entry.path(), out).string();
+      if (name.find(".tmp") == std::string::npos && name != "report.html") files.push_back(name);
+    }
+    std::sort(files.begin(), files.end());
+    input.steps = files;
+    formats::WriteTextFileAtomically(report_path, report::RenderHtml(input));
+  }
+  runner.Finish();
+
+  std::string text;
+  for (const std::string& l : summary) text += l + "\n";
+  for (const std::string& p : runner.problems()) text += "  problem: " + p + "\n";
+  formats::WriteTextFileAtomically(out / "summary.txt", text);
+  std::cout << text;
+  return runner.problems().empty() ? 0 : 1;
+}
 
 }  // namespace ema

@@ -1,0 +1,192 @@
+#include "project_file.hpp"
+
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "ema/core/error.hpp"
+
+namespace ema::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string Where(const fs::path& file, const toml::node& node) {
+  const auto& source = node.source();
+  return file.string() + (source.begin.line ? ":" + std::to_string(source.begin.line) : std::string());
+}
+
+void CheckKeys(const fs::path& file, const toml::table& table, const std::set<std::string>& allowed,
+               const std::string& context) {
+  for (const auto& [key, value] : table) {
+    if (allowed.count(std::string(key.str()))) continue;
+    std::ostringstream list;
+    for (const auto& a : allowed) list << (list.tellp() ? ", " : "") << a;
+    throw InputError(Where(file, value), "unknown key '" + std::string(key.str()) + "' in " + context +
+                                             " (allowed: " + list.str() + ")");
+  }
+}
+
+std::string String(const fs::path& file, const toml::node& node, const std::string& key) {
+  if (auto v = node.value<std::string>()) return *v;
+  throw InputError(Where(file, node), "'" + key + "' must be a string");
+}
+
+double Number(const fs::path& file, const toml::node& node, const std::string& key) {
+  if (auto v = node.value<double>()) return *v;
+  throw InputError(Where(file, node), "'" + key + "' must be a number");
+}
+
+fs::path Resolve(const fs::path& file, const std::string& relative) {
+  const fs::path p(relative);
+  return fs::absolute(p.is_absolute() ? p : file.parent_path() / p).lexically_normal();
+}
+
+fs::path ExistingFile(const fs::path& file, const toml::node& node, const std::string& key) {
+  const fs::path p = Resolve(file, String(file, node, key));
+  if (!fs::is_regular_file(p)) throw InputError(Where(file, node), "'" + key + "': no such file " + p.string());
+  return p;
+}
+
+std::vector<std::string> Strings(const fs::path& file, const toml::node& node, const std::string& key) {
+  std::vector<std::string> out;
+  if (const toml::array* a = node.as_array()) {
+    for (const toml::node& item : *a) out.push_back(String(file, item, key));
+    return out;
+  }
+  throw InputError(Where(file, node), "'" + key + "' must be an array of strings");
+}
+
+}  // namespace
+
+Project ReadProjectFile(const fs::path& path) {
+  if (!fs::is_regular_file(path)) throw InputError(path.string(), "no such project file");
+  toml::table root;
+  try {
+    root = toml::parse_file(path.string());
+  } catch (const toml::parse_error& e) {
+    throw InputError(path.string() + ":" + std::to_string(e.source().begin.line),
+                     "not a valid TOML project file: " + std::string(e.description()));
+  }
+  Project project;
+  project.file = fs::absolute(path).lexically_normal();
+  const fs::path& file = project.file;
+  CheckKeys(file, root, {"project", "test", "frf", "fit", "diagnose", "report", "output"}, "the project file");
+
+  const toml::table* head = root["project"].as_table();
+  if (!head) throw InputError(file.string(), "missing [project] table (with model = \"MODEL.toml\")");
+  CheckKeys(file, *head, {"name", "model"}, "[project]");
+  project.name = (*head)["name"] ? String(file, *(*head)["name"].node(), "name") : file.stem().string();
+  if (!(*head)["model"]) throw InputError(Where(file, *head), "[project] needs model = \"MODEL.toml\"");
+  project.model = ExistingFile(file, *(*head)["model"].node(), "model");
+
+  const toml::array* tests = root["test"].as_array();
+  if (!tests || tests->empty())
+    throw InputError(file.string(), "no [[test]] (each names a setup and its time data files)");
+  std::set<std::string> names;
+  for (const toml::node& node : *tests) {
+    const toml::table* t = node.as_table();
+    if (!t) throw InputError(Where(file, node), "[[test]] must be a table");
+    CheckKeys(file, *t, {"setup", "name", "time", "frf"}, "[[test]]");
+    ProjectTest test;
+    if ((*t)["setup"]) test.setup = String(file, *(*t)["setup"].node(), "setup");
+    test.name = (*t)["name"] ? String(file, *(*t)["name"].node(), "name") : test.setup;
+    if (test.name.empty()) test.name = "test" + std::to_string(project.tests.size() + 1);
+    if (test.name.find_first_of("/\\") != std::string::npos || test.name == "." || test.name == "..")
+      throw InputError(Where(file, *t), "test name '" + test.name + "' must be a plain folder name");
+    if (!names.insert(test.name).second)
+      throw InputError(Where(file, *t), "two tests named '" + test.name + "' (give each a distinct name or setup)");
+    if (const toml::node* time = (*t)["time"].node()) {
+      if (time->is_string()) {
+        test.time.push_back(ExistingFile(file, *time, "time"));
+      } else if (const toml::array* a = time->as_array()) {
+        for (const toml::node& item : *a) test.time.push_back(ExistingFile(file, item, "time"));
+      } else {
+        throw InputError(Where(file, *time), "'time' must be a file name or an array of file names");
+      }
+    }
+    if (const toml::node* frf = (*t)["frf"].node()) test.frf = ExistingFile(file, *frf, "frf");
+    if (test.time.empty() && !test.frf)
+      throw InputError(Where(file, *t), "[[test]] '" + test.name + "' needs time = [files] (or frf = \"FRF.unv\")");
+    if (!test.time.empty() && test.frf)
+      throw InputError(Where(file, *t), "[[test]] '" + test.name + "' gives both time and frf; keep one");
+    project.tests.push_back(std::move(test));
+  }
+
+  if (const toml::table* frf = root["frf"].as_table()) {
+    CheckKeys(file, *frf, {"estimator"}, "[frf]");
+    if ((*frf)["estimator"]) project.estimator = String(file, *(*frf)["estimator"].node(), "estimator");
+  }
+  if (const toml::table* fit = root["fit"].as_table()) {
+    CheckKeys(file, *fit, {"band", "order_max", "select", "args"}, "[fit]");
+    if (const toml::node* band = (*fit)["band"].node()) {
+      const toml::array* a = band->as_array();
+      if (!a || a->size() != 2) throw InputError(Where(file, *band), "'band' must be [low_hz, high_hz]");
+      const double lo = Number(file, *a->get(0), "band"), hi = Number(file, *a->get(1), "band");
+      if (!(lo >= 0.0 && hi > lo)) throw InputError(Where(file, *band), "'band' must satisfy 0 <= low < high");
+      project.band_hz = std::make_pair(lo, hi);
+    }
+    if (const toml::node* order = (*fit)["order_max"].node()) {
+      auto v = order->value<int64_t>();
+      if (!v || *v < 1) throw InputError(Where(file, *order), "'order_max' must be a positive integer");
+      project.order_max = static_cast<int>(*v);
+    }
+    if ((*fit)["select"]) project.select = String(file, *(*fit)["select"].node(), "select");
+    if ((*fit)["args"]) project.fit_extra = Strings(file, *(*fit)["args"].node(), "args");
+  }
+  if (const toml::table* diagnose = root["diagnose"].as_table()) {
+    CheckKeys(file, *diagnose, {"args"}, "[diagnose]");
+    if ((*diagnose)["args"]) project.diagnose_extra = Strings(file, *(*diagnose)["args"].node(), "args");
+  }
+  project.title = project.name;
+  if (const toml::table* report = root["report"].as_table()) {
+    CheckKeys(file, *report, {"title", "lines"}, "[report]");
+    if ((*report)["title"]) project.title = String(file, *(*report)["title"].node(), "title");
+    if (const toml::node* lines = (*report)["lines"].node()) {
+      const toml::array* a = lines->as_array();
+      if (!a) throw InputError(Where(file, *lines), "'lines' must be an array of [node, node] pairs");
+      for (const toml::node& pair : *a) {
+        const toml::array* p = pair.as_array();
+        auto first = p && p->size() == 2 ? p->get(0)->value<int64_t>() : std::nullopt;
+        auto second = p && p->size() == 2 ? p->get(1)->value<int64_t>() : std::nullopt;
+        if (!first || !second) throw InputError(Where(file, pair), "each entry of 'lines' must be [node, node]");
+        project.lines.emplace_back(static_cast<int>(*first), static_cast<int>(*second));
+      }
+    }
+  }
+  if (const toml::table* output = root["output"].as_table()) {
+    CheckKeys(file, *output, {"binary"}, "[output]");
+    if (const toml::node* binary = (*output)["binary"].node()) {
+      auto v = binary->value<bool>();
+      if (!v) throw InputError(Where(file, *binary), "'binary' must be true or false");
+      project.binary = *v;
+    }
+  }
+  return project;
+}
+
+std::vector<Node> ReadModelPoints(const fs::path& model_file) {
+  std::vector<Node> nodes;
+  try {
+    const toml::table root = toml::parse_file(model_file.string());
+    if (const toml::array* points = root["point"].as_array()) {
+      for (const toml::node& node : *points) {
+        const toml::table* p = node.as_table();
+        if (!p) continue;
+        auto id = (*p)["id"].value<int64_t>();
+        const toml::array* at = (*p)["at"].as_array();
+        if (!id || !at || at->size() != 3) continue;
+        Node n;
+        n.id = static_cast<int>(*id);
+        for (int k = 0; k < 3; ++k) n.position[k] = at->get(k)->value<double>().value_or(0.0);
+        nodes.push_back(n);
+      }
+    }
+  } catch (const std::exception&) {
+    nodes.clear();  // the model reader of the pipeline reports the real error
+  }
+  return nodes;
+}
+
+}  // namespace ema::app

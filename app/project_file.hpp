@@ -1,0 +1,52 @@
+// The project file of `ema run` (TOML, docs/project-file.md): which model, which tests (setup →
+// time data files), and the options of each step.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ema/core/types.hpp"
+
+namespace ema::app {
+
+/// One test of the project: a setup of the model and its measured data.
+struct ProjectTest {
+  std::string setup;                           ///< a [[setup]] name of the model ("" = no setups)
+  std::string name;                            ///< folder name in OUT/ (defaults to the setup)
+  std::vector<std::filesystem::path> time;     ///< time data files (roving sets), absolute
+  std::optional<std::filesystem::path> frf;    ///< FRF file instead of time data (skips `ema frf`)
+};
+
+struct Project {
+  std::filesystem::path file;                  ///< the project file itself
+  std::string name;                            ///< [project] name (defaults to the file stem)
+  std::filesystem::path model;                 ///< absolute path of the model file
+  std::vector<ProjectTest> tests;
+  // [frf]
+  std::string estimator = "H1";
+  // [fit]
+  std::optional<std::pair<double, double>> band_hz;
+  std::optional<int> order_max;
+  std::string select = "auto";
+  std::vector<std::string> fit_extra;          ///< extra `ema fit` arguments, verbatim
+  // [diagnose]
+  std::vector<std::string> diagnose_extra;     ///< extra `ema diagnose` arguments, verbatim
+  // [report]
+  std::string title;                           ///< defaults to the project name
+  std::vector<std::pair<int, int>> lines;      ///< wireframe edges between test points
+  bool binary = false;                         ///< [output] binary = true: 58b FRF files
+};
+
+/// Reads and checks a project file. Relative paths are resolved against the file's folder.
+/// InputError ("file:line: what") for a missing file, bad TOML, an unknown key (with the keys
+/// allowed there), a wrong type, no [[test]], or a data file that does not exist.
+Project ReadProjectFile(const std::filesystem::path& path);
+
+/// Test points of the model file's [[point]] entries (id and `at`), for the report's geometry.
+/// Points given by FE node are skipped. Never throws: an unreadable file gives an empty list.
+std::vector<Node> ReadModelPoints(const std::filesystem::path& model_file);
+
+}  // namespace ema::app

@@ -1,0 +1,273 @@
+// Assembles the report page: the data object (report_data.cpp helpers) and the embedded assets.
+#include "report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "embedded_assets.hpp"
+
+namespace ema::report {
+
+namespace {
+
+using json = nlohmann::json;
+
+// Five significant digits: plenty for a plot, and keeps the page small.
+double Round(double value) {
+  if (!std::isfinite(value)) return value;
+  char text[32];
+  std::snprintf(text, sizeof text, "%.5g", value);
+  return std::strtod(text, nullptr);
+}
+
+json Rounded(const Eigen::VectorXd& values) {
+  json out = json::array();
+  for (double v : values) out.push_back(std::isfinite(v) ? json(Round(v)) : json(nullptr));
+  return out;
+}
+
+std::string Label(const Dof& dof) { return DofName(dof); }
+
+// Lines shown in the FRF and stabilisation plots: the fit band widened by 10 %, or everything.
+std::vector<int> DisplayLines(const FrfSet& frfs, double lo, double hi) {
+  std::vector<int> lines;
+  const bool band = hi > lo;
+  const double margin = band ? 0.1 * (hi - lo) : 0.0;
+  for (int i = 0; i < frfs.LineCount(); ++i) {
+    const double f = frfs.frequency_hz[i];
+    if (f <= 0.0) continue;
+    if (band && (f < lo - margin || f > hi + margin)) continue;
+    lines.push_back(i);
+  }
+  // At most ~1500 points per trace: stride the lines if the FRFs are finer than a screen can show.
+  const int stride = std::max<int>(1, static_cast<int>(lines.size()) / 1500 + 1);
+  if (stride > 1) {
+    std::vector<int> kept;
+    for (size_t i = 0; i < lines.size(); i += stride) kept.push_back(lines[i]);
+    lines.swap(kept);
+  }
+  return lines;
+}
+
+json FrfData(const SetupResults& setup, const ShapeTable& test) {
+  json out = json::object();
+  if (!setup.frfs || setup.frfs->LineCount() == 0) return out;
+  const FrfSet& frfs = *setup.frfs;
+  const std::vector<int> lines = DisplayLines(frfs, setup.band_lo_hz, setup.band_hi_hz);
+  Eigen::VectorXd f(static_cast<int>(lines.size()));
+  for (int i = 0; i < f.size(); ++i) f[i] = frfs.frequency_hz[lines[i]];
+  out["frequency_hz"] = Rounded(f);
+  std::vector<std::complex<double>> poles;
+  for (size_t m = 0; m < test.frequency_hz.size(); ++m)
+    if (std::isfinite(test.frequency_hz[m]))
+      poles.push_back(FrequencyAndDampingToPole(test.frequency_hz[m],
+                                                std::isfinite(test.damping_ratio[m]) ? test.damping_ratio[m] : 0.01));
+  double lo = setup.band_lo_hz, hi = setup.band_hi_hz;
+  if (hi <= lo) {
+    lo = frfs.frequency_hz.minCoeff();
+    hi = frfs.frequency_hz.maxCoeff();
+  }
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(f.size());
+  json list = json::array();
+  for (int r = 0; r < frfs.ReferenceCount(); ++r) {
+    for (int o = 0; o < frfs.OutputCount(); ++o) {
+      const Eigen::VectorXcd h = frfs.h[r].col(o);
+      if (!h.allFinite() && !(h.array() == h.array()).any()) continue;  // not measured
+      const Eigen::VectorXcd fit = poles.empty() ? Eigen::VectorXcd::Constant(h.size(), {kNaN, kNaN})
+                                                 : SynthesiseFrf(frfs.frequency_hz, h, poles, lo, hi);
+      Eigen::VectorXd mag(f.size()), phase(f.size()), fit_mag(f.size()), fit_phase(f.size());
+      for (int i = 0; i < f.size(); ++i) {
+        const std::complex<double> v = h[lines[i]], w = fit[lines[i]];
+        mag[i] = std::abs(v);
+        phase[i] = std::arg(v) * 180.0 / M_PI;
+        fit_mag[i] = std::abs(w);
+        fit_phase[i] = std::arg(w) * 180.0 / M_PI;
+        if (std::isfinite(mag[i])) sum[i] += mag[i];
+      }
+      json item = {{"label", Label(frfs.outputs[o]) + " / " + Label(frfs.references[r])},
+                   {"magnitude", Rounded(mag)},
+                   {"phase_deg", Rounded(phase)},
+                   {"fit_magnitude", Rounded(fit_mag)},
+                   {"fit_phase_deg", Rounded(fit_phase)}};
+      if (!frfs.coherence.empty() && r < static_cast<int>(frfs.coherence.size()) && frfs.coherence[r].cols() > o) {
+        Eigen::VectorXd coh(f.size());
+        for (int i = 0; i < f.size(); ++i) coh[i] = frfs.coherence[r](lines[i], o);
+        item["coherence"] = Rounded(coh);
+      }
+      list.push_back(std::move(item));
+    }
+  }
+  out["frfs"] = std::move(list);
+  out["sum_magnitude"] = Rounded(sum);
+  out["unit"] = frfs.response_unit + "/" + frfs.force_unit;
+  return out;
+}
+
+json MacData(const ShapeTable& test, const json& model_json) {
+  const ShapeTable model = ReadShapeTable(model_json);
+  int shared = 0;
+  const Eigen::MatrixXd mac = MacMatrix(test, model, &shared);
+  if (mac.size() == 0) return json::object();
+  json values = json::array();
+  for (int i = 0; i < mac.rows(); ++i) {
+    json row = json::array();
+    for (int j = 0; j < mac.cols(); ++j) row.push_back(Round(mac(i, j)));
+    values.push_back(std::move(row));
+  }
+  auto labels = [](const ShapeTable& t, const char* prefix) {
+    json out = json::array();
+    for (size_t m = 0; m < t.frequency_hz.size(); ++m) {
+      char text[64];
+      std::snprintf(text, sizeof text, "%s%zu %.1f Hz", prefix, m + 1, t.frequency_hz[m]);
+      out.push_back(text);
+    }
+    return out;
+  };
+  return {{"test", labels(test, "T")}, {"model", labels(model, "M")}, {"values", values}, {"shared_dofs", shared}};
+}
+
+json ModeData(const ShapeTable& test, const SetupResults& setup) {
+  json out = json::object();
+  if (test.shapes.cols() == 0 || setup.geometry.empty()) return out;
+  json nodes = json::array();
+  std::map<int, int> index;
+  for (const Node& node : setup.geometry) {
+    index[node.id] = static_cast<int>(nodes.size());
+    nodes.push_back({{"id", node.id},
+                     {"x", Round(node.position.x())},
+                     {"y", Round(node.position.y())},
+                     {"z", Round(node.position.z())}});
+  }
+  json modes = json::array();
+  for (int m = 0; m < test.shapes.cols(); ++m) {
+    // Per node: [re x, re y, re z, im x, im y, im z], normalised to the largest translation.
+    std::vector<std::array<std::complex<double>, 3>> u(setup.geometry.size());
+    double largest = 0.0;
+    for (size_t d = 0; d < test.dofs.size(); ++d) {
+      const Dof& dof = test.dofs[d];
+      auto it = index.find(dof.node);
+      if (it == index.end() || dof.direction < 1 || dof.direction > 3) continue;
+      u[it->second][dof.direction - 1] = test.shapes(static_cast<int>(d), m);
+      largest = std::max(largest, std::abs(test.shapes(static_cast<int>(d), m)));
+    }
+    json shape = json::array();
+    for (const auto& v : u) {
+      json row = json::array();
+      for (int k = 0; k < 3; ++k) row.push_back(largest > 0 ? Round(v[k].real() / largest) : 0.0);
+      for (int k = 0; k < 3; ++k) row.push_back(largest > 0 ? Round(v[k].imag() / largest) : 0.0);
+      shape.push_back(std::move(row));
+    }
+    modes.push_back({{"frequency_hz", Round(test.frequency_hz[m])},
+                     {"damping_ratio", Round(test.damping_ratio[m])},
+                     {"shape", std::move(shape)}});
+  }
+  json lines = json::array();
+  for (const auto& [a, b] : setup.lines)
+    if (index.count(a) && index.count(b)) lines.push_back({index[a], index[b]});
+  out = {{"nodes", nodes}, {"lines", lines}, {"modes", modes}};
+  return out;
+}
+
+json StabilisationData(const SetupResults& setup) {
+  const StabilisationPoints points = ReadStabilisation(setup.stabilisation);
+  if (points.order.empty()) return json::object();
+  json order = json::array(), f = json::array(), zeta = json::array(), status = json::array();
+  for (size_t i = 0; i < points.order.size(); ++i) {
+    order.push_back(points.order[i]);
+    f.push_back(Round(points.frequency_hz[i]));
+    zeta.push_back(std::isfinite(points.damping_ratio[i]) ? json(Round(points.damping_ratio[i])) : json(nullptr));
+    status.push_back(points.status[i]);
+  }
+  return {{"order", order}, {"frequency_hz", f}, {"damping_ratio", zeta}, {"status", status}};
+}
+
+// Keeps a JSON text safe inside a <script> element.
+std::string ScriptSafe(std::string text) {
+  for (size_t at = text.find("</"); at != std::string::npos; at = text.find("</", at + 3)) text.replace(at, 2, "<\\/");
+  return text;
+}
+
+std::string HtmlEscape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+json BuildReportData(const ReportInput& input) {
+  json data = {{"title", input.title}, {"subtitle", input.subtitle}};
+  data["summary"] = input.summary;
+  data["files"] = input.steps;
+  data["problems"] = input.problems;
+  data["diagnosis"] = input.diagnosis.is_null() ? json::object() : input.diagnosis;
+  json setups = json::array();
+  for (const SetupResults& setup : input.setups) {
+    const ShapeTable test = ReadShapeTable(setup.test_modes);
+    json s = {{"name", setup.name}};
+    s["band_hz"] = {setup.band_lo_hz, setup.band_hi_hz};
+    s["stabilisation"] = StabilisationData(setup);
+    json selected = json::array();
+    for (double f : test.frequency_hz) selected.push_back(Round(f));
+    s["selected_hz"] = selected;
+    s["frf"] = FrfData(setup, test);
+    s["mac_before"] = MacData(test, setup.model_modes_before);
+    s["mac_after"] = MacData(test, setup.model_modes_after);
+    s["correlation_before"] = setup.correlation_before.is_null() ? json::object() : setup.correlation_before;
+    s["correlation_after"] = setup.correlation_after.is_null() ? json::object() : setup.correlation_after;
+    s["shapes"] = ModeData(test, setup);
+    json rejected = json::array();
+    if (setup.frf_summary.is_object() && setup.frf_summary.contains("frfs") && setup.frf_summary["frfs"].is_array()) {
+      for (const json& frf : setup.frf_summary["frfs"]) {
+        if (!frf.contains("rejected") || !frf["rejected"].is_array()) continue;
+        for (const json& r : frf["rejected"]) {
+          json entry = r;
+          entry["frf"] = std::to_string(frf.value("response_node", 0)) + frf.value("response_dir", std::string()) +
+                         " / " + std::to_string(frf.value("reference_node", 0)) + frf.value("reference_dir", std::string());
+          rejected.push_back(std::move(entry));
+        }
+      }
+    }
+    s["rejected"] = rejected;
+    setups.push_back(std::move(s));
+  }
+  data["setups"] = std::move(setups);
+  return data;
+}
+
+std::string RenderHtml(const ReportInput& input) {
+  const std::string data = ScriptSafe(BuildReportData(input).dump());
+  std::string plotly(PlotlyJs());
+  std::string script(ReportJs());
+  for (std::string* js : {&plotly, &script})
+    for (size_t at = js->find("</script"); at != std::string::npos; at = js->find("</script", at + 3))
+      js->replace(at, 2, "<\\/");
+  std::string html;
+  html.reserve(plotly.size() + data.size() + 65536);
+  html += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
+  html += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
+  html += "<title>" + HtmlEscape(input.title) + "</title>\n<style>\n";
+  html += ReportCss();
+  html += "</style>\n<script>\n";
+  html += plotly;
+  html += "\n</script>\n</head>\n<body>\n<header><h1>" + HtmlEscape(input.title) + "</h1><p class=\"subtitle\">" +
+          HtmlEscape(input.subtitle) + "</p></header>\n<main id=\"report\"></main>\n";
+  html += "<footer>Written by <code>ema run</code>. Charts: plotly.js (MIT licence), embedded; this file needs no "
+          "network.</footer>\n";
+  html += "<script id=\"ema-data\" type=\"application/json\">" + data + "</script>\n<script>\n";
+  html += script;
+  html += "\n</script>\n</body>\n</html>\n";
+  return html;
+}
+
+}  // namespace ema::report

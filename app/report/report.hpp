@@ -1,0 +1,87 @@
+// The self-contained HTML report of `ema run`: one file with every chart (plotly.js embedded), the
+// data it draws embedded as JSON, and no network access when opened.
+//
+// The inputs are the files the pipeline steps write (the JSON of `ema frf/fit/model/correlate/
+// diagnose`) plus the measured FRFs, so the report shows exactly what the steps produced.
+#pragma once
+
+#include <Eigen/Core>
+#include <complex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ema/core/types.hpp"
+
+namespace ema::report {
+
+/// Everything the report shows about one test (one setup of the model).
+struct SetupResults {
+  std::string name;                    ///< setup name ("stud-5um"), or the test's name
+  std::optional<FrfSet> frfs;          ///< measured FRFs (ema frf output), if available
+  nlohmann::json frf_summary;          ///< `ema frf --json` (averages, rejected impacts)
+  nlohmann::json stabilisation;        ///< `ema fit --stabilisation`
+  nlohmann::json test_modes;           ///< `ema fit --json` ({"modes": [...]})
+  nlohmann::json model_modes_before;   ///< `ema model --json` of the nominal model
+  nlohmann::json model_modes_after;    ///< `ema model --json` of the updated model
+  nlohmann::json correlation_before;   ///< `ema correlate --json`, nominal model
+  nlohmann::json correlation_after;    ///< `ema correlate --json`, updated model
+  std::vector<Node> geometry;          ///< test points (m), for the animated shapes
+  std::vector<std::pair<int, int>> lines;  ///< wireframe edges between test points (node ids)
+  double band_lo_hz = 0.0;             ///< fit band; 0/0 = the whole FRF range
+  double band_hi_hz = 0.0;
+};
+
+struct ReportInput {
+  std::string title = "ema report";
+  std::string subtitle;                ///< e.g. the project file and the date
+  std::vector<std::string> summary;    ///< the run's one-screen summary, one line each
+  std::vector<std::string> steps;      ///< the files each step wrote, for the "files" list
+  std::vector<SetupResults> setups;
+  nlohmann::json diagnosis;            ///< `ema diagnose --json`
+  std::vector<std::string> problems;   ///< steps that failed or were skipped, shown in the page
+};
+
+/// The complete page. Deterministic for a given input (no timestamps added here).
+std::string RenderHtml(const ReportInput& input);
+
+/// The data object the page's script draws from (exposed for tests).
+nlohmann::json BuildReportData(const ReportInput& input);
+
+// ---- pieces of the data preparation, exposed for tests ----
+
+/// A mode shape as read from a modes JSON (cli.md layout), keyed by DOF with positive direction
+/// codes (a "-Z" value is stored negated under "+Z").
+struct ShapeTable {
+  std::vector<Dof> dofs;
+  std::vector<double> frequency_hz;
+  std::vector<double> damping_ratio;
+  Eigen::MatrixXcd shapes;             ///< dofs × modes
+};
+
+/// Reads {"modes": [{"frequency_hz", "damping_ratio", "shape": [{"node", "dir", "value"}]}]}.
+/// Unknown or missing pieces give an empty table (the report then says the chart is unavailable).
+ShapeTable ReadShapeTable(const nlohmann::json& modes_json);
+
+/// MAC between every test and every model mode on their shared DOFs (test modes as rows).
+/// Returns an empty matrix when no DOF is shared.
+Eigen::MatrixXd MacMatrix(const ShapeTable& test, const ShapeTable& model, int* shared_dofs = nullptr);
+
+/// Least-squares synthesis of one FRF from the given poles (rad/s, Im > 0) on the lines inside
+/// [lo, hi] Hz: residues of every pole and its conjugate plus a constant and a 1/(jw)^2 term
+/// (upper and lower residuals), the LSFD model. Returns NaN outside the band.
+Eigen::VectorXcd SynthesiseFrf(const Eigen::VectorXd& frequency_hz, const Eigen::VectorXcd& measured,
+                               const std::vector<std::complex<double>>& poles, double lo_hz, double hi_hz);
+
+/// Normalised stabilisation diagram: one entry per pole (order, frequency, damping, stable flag).
+struct StabilisationPoints {
+  std::vector<int> order;
+  std::vector<double> frequency_hz;
+  std::vector<double> damping_ratio;
+  std::vector<std::string> status;     ///< "stable" or what failed ("unstable", "f", "fd", ...)
+};
+StabilisationPoints ReadStabilisation(const nlohmann::json& stabilisation);
+
+}  // namespace ema::report

@@ -1,0 +1,344 @@
+// The ema report page: draws every chart from the JSON embedded in <script id="ema-data"> with
+// plotly.js (embedded above). When every chart has rendered, <body> gets data-charts-rendered equal
+// to data-charts-expected (the headless-browser test checks this); errors land in data-errors.
+(function () {
+  'use strict';
+  var body = document.body;
+  var errors = [];
+  function noteError(message) {
+    errors.push(String(message));
+    body.setAttribute('data-errors', errors.join(' | '));
+  }
+  window.addEventListener('error', function (e) { noteError(e.message || e); });
+  window.addEventListener('unhandledrejection', function (e) { noteError(e.reason || 'promise rejected'); });
+
+  var data = JSON.parse(document.getElementById('ema-data').textContent);
+  var main = document.getElementById('report');
+  var expected = 0;
+  var rendered = 0;
+  var pending = [];
+  var config = { responsive: true, displaylogo: false };
+
+  function el(tag, attrs, children) {
+    var node = document.createElement(tag);
+    if (attrs) Object.keys(attrs).forEach(function (k) {
+      if (k === 'text') node.textContent = attrs[k]; else node.setAttribute(k, attrs[k]);
+    });
+    (children || []).forEach(function (c) { node.appendChild(typeof c === 'string' ? document.createTextNode(c) : c); });
+    return node;
+  }
+  function section(parent, title, note) {
+    var s = el('section', { 'class': 'card' }, [el('h2', { text: title })]);
+    if (note) s.appendChild(el('p', { 'class': 'note', text: note }));
+    parent.appendChild(s);
+    return s;
+  }
+  function unavailable(parent, what) {
+    parent.appendChild(el('p', { 'class': 'missing', text: what + ': not available in this run.' }));
+  }
+  function chart(parent, traces, layout, cls) {
+    var div = el('div', { 'class': 'chart ' + (cls || '') });
+    parent.appendChild(div);
+    expected += 1;
+    layout = Object.assign({ margin: { l: 60, r: 60, t: 30, b: 50 }, font: { size: 12 },
+      legend: { orientation: 'h', y: -0.2 } }, layout);
+    pending.push(Plotly.newPlot(div, traces, layout, config).then(function () {
+      rendered += 1;
+      div.setAttribute('data-rendered', '1');
+      return div;
+    }));
+    return div;
+  }
+  function fmt(v, digits) {
+    return (v === null || v === undefined || isNaN(v)) ? '–' : Number(v).toFixed(digits);
+  }
+  function table(parent, headers, rows, cls) {
+    var t = el('table', { 'class': cls || '' });
+    t.appendChild(el('tr', null, headers.map(function (h) { return el('th', { text: h }); })));
+    rows.forEach(function (r) {
+      t.appendChild(el('tr', null, r.map(function (c) { return el('td', { text: String(c) }); })));
+    });
+    parent.appendChild(t);
+    return t;
+  }
+
+  // ---- summary ----
+  var top = section(main, 'Summary');
+  if (data.summary && data.summary.length) top.appendChild(el('pre', { 'class': 'summary', text: data.summary.join('\n') }));
+  if (data.problems && data.problems.length) {
+    top.appendChild(el('p', { 'class': 'missing', text: 'Steps that did not complete:' }));
+    top.appendChild(el('ul', null, data.problems.map(function (p) { return el('li', { text: p }); })));
+  }
+
+  // ---- per setup ----
+  (data.setups || []).forEach(function (setup) {
+    var wrap = el('div', { 'class': 'setup' }, [el('h2', { 'class': 'setup-title', text: 'Test ' + setup.name })]);
+    main.appendChild(wrap);
+    var frf = setup.frf || {};
+    var band = setup.band_hz || [0, 0];
+
+    // Stabilisation diagram with the sum of FRFs on a second axis.
+    var stab = section(wrap, 'Stabilisation diagram — ' + setup.name,
+      'Poles of every model order (filled: stable in frequency, damping and participation vector; open: not stable). ' +
+      'Dashed lines: the modes selected automatically. Grey: sum of all FRF magnitudes. Drag to zoom, double-click to reset.');
+    var st = setup.stabilisation || {};
+    if (st.order && st.order.length) {
+      var groups = {};
+      st.status.forEach(function (s, i) {
+        var key = s === 'stable' ? 'stable' : (s === 'non-physical' ? 'non-physical' : 'unstable');
+        groups[key] = groups[key] || { x: [], y: [], text: [] };
+        groups[key].x.push(st.frequency_hz[i]);
+        groups[key].y.push(st.order[i]);
+        groups[key].text.push('order ' + st.order[i] + '<br>' + fmt(st.frequency_hz[i], 2) + ' Hz<br>ζ ' +
+          fmt(100 * st.damping_ratio[i], 2) + ' %<br>' + s);
+      });
+      var style = {
+        stable: { symbol: 'circle', color: '#1b7837', size: 7 },
+        unstable: { symbol: 'circle-open', color: '#d6604d', size: 6 },
+        'non-physical': { symbol: 'x-thin-open', color: '#999999', size: 5 }
+      };
+      var traces = Object.keys(groups).map(function (k) {
+        return { type: 'scattergl', mode: 'markers', name: k, x: groups[k].x, y: groups[k].y, text: groups[k].text,
+          hoverinfo: 'text', marker: { symbol: style[k].symbol, color: style[k].color, size: style[k].size } };
+      });
+      if (frf.sum_magnitude) traces.push({ type: 'scatter', mode: 'lines', name: 'sum of |FRF|', x: frf.frequency_hz,
+        y: frf.sum_magnitude, yaxis: 'y2', line: { color: '#888', width: 1 }, hoverinfo: 'skip' });
+      var shapes = (setup.selected_hz || []).map(function (f) {
+        return { type: 'line', x0: f, x1: f, yref: 'paper', y0: 0, y1: 1, line: { color: '#2166ac', dash: 'dash', width: 1 } };
+      });
+      chart(stab, traces, { height: 460, xaxis: { title: { text: 'frequency (Hz)' } },
+        yaxis: { title: { text: 'model order' } },
+        yaxis2: { title: { text: 'sum |H|' }, overlaying: 'y', side: 'right', type: 'log', showgrid: false },
+        shapes: shapes });
+    } else {
+      unavailable(stab, 'Stabilisation diagram');
+    }
+
+    // Measured FRFs with the synthesised fit.
+    var fs = section(wrap, 'FRFs: measured and synthesised — ' + setup.name,
+      'Measured accelerance (H1) and the FRF synthesised from the fitted poles (least squares residues with upper and ' +
+      'lower residual terms, inside the fit band). Pick any FRF from the list.');
+    if (frf.frfs && frf.frfs.length) {
+      var select = el('select', { 'aria-label': 'FRF' });
+      frf.frfs.forEach(function (item, i) { select.appendChild(el('option', { value: String(i), text: item.label })); });
+      fs.appendChild(el('label', null, ['FRF (response / reference): ', select]));
+      var frfTraces = function (i) {
+        var item = frf.frfs[i];
+        return [
+          { type: 'scatter', mode: 'lines', name: 'measured |H|', x: frf.frequency_hz, y: item.magnitude, line: { color: '#2166ac' } },
+          { type: 'scatter', mode: 'lines', name: 'synthesised |H|', x: frf.frequency_hz, y: item.fit_magnitude,
+            line: { color: '#d6604d', dash: 'dash' } },
+          { type: 'scatter', mode: 'lines', name: 'measured phase', x: frf.frequency_hz, y: item.phase_deg, yaxis: 'y2',
+            line: { color: '#2166ac', width: 1 }, showlegend: false },
+          { type: 'scatter', mode: 'lines', name: 'synthesised phase', x: frf.frequency_hz, y: item.fit_phase_deg,
+            yaxis: 'y2', line: { color: '#d6604d', width: 1, dash: 'dash' }, showlegend: false }
+        ];
+      };
+      var frfLayout = { height: 460, xaxis: { title: { text: 'frequency (Hz)' }, anchor: 'y2' },
+        yaxis: { title: { text: '|H| (' + (frf.unit || '') + ')' }, type: 'log', domain: [0.35, 1] },
+        yaxis2: { title: { text: 'phase (°)' }, domain: [0, 0.28], range: [-180, 180], dtick: 90 } };
+      var frfDiv = chart(fs, frfTraces(0), frfLayout);
+      select.addEventListener('change', function () { Plotly.react(frfDiv, frfTraces(Number(select.value)), frfLayout); });
+    } else {
+      unavailable(fs, 'FRFs');
+    }
+    if (setup.rejected && setup.rejected.length) {
+      fs.appendChild(el('p', { text: 'Impacts rejected by the quality checks:' }));
+      table(fs, ['FRF', 'impact', 'reason'], setup.rejected.map(function (r) { return [r.frf, r.impact, r.reason]; }), 'small');
+    }
+
+    // MAC matrices.
+    var macs = section(wrap, 'MAC matrix — ' + setup.name,
+      'Modal assurance criterion between the test modes (rows) and the model modes (columns), on the shared DOFs.');
+    var macRow = el('div', { 'class': 'row' });
+    macs.appendChild(macRow);
+    [['mac_before', 'nominal model'], ['mac_after', 'updated model']].forEach(function (pair) {
+      var m = setup[pair[0]] || {};
+      var cell = el('div', { 'class': 'col' }, [el('h3', { text: 'test vs ' + pair[1] +
+        (m.shared_dofs ? ' (' + m.shared_dofs + ' DOFs)' : '') })]);
+      macRow.appendChild(cell);
+      if (!m.values) { unavailable(cell, 'MAC vs ' + pair[1]); return; }
+      var z = m.values.slice().reverse();
+      var annotations = [];
+      z.forEach(function (row, i) {
+        row.forEach(function (v, j) {
+          annotations.push({ x: m.model[j], y: m.test[m.test.length - 1 - i], text: v.toFixed(2), showarrow: false,
+            font: { color: v > 0.6 ? 'white' : 'black', size: 10 } });
+        });
+      });
+      chart(cell, [{ type: 'heatmap', z: z, x: m.model, y: m.test.slice().reverse(), zmin: 0, zmax: 1,
+        colorscale: 'Blues', colorbar: { title: { text: 'MAC' } } }],
+        { height: 380, annotations: annotations, margin: { l: 110, r: 20, t: 20, b: 90 } }, 'half');
+    });
+
+    // Validation tables.
+    var val = section(wrap, 'Validation tables — ' + setup.name,
+      'Agreement = 100·(1 − |f_model − f_test| / f_model), as in the reference thesis (Tables 7.7, 7.8).');
+    var valRow = el('div', { 'class': 'row' });
+    val.appendChild(valRow);
+    [['correlation_before', 'before (nominal model)'], ['correlation_after', 'after (updated model)']].forEach(function (pair) {
+      var c = setup[pair[0]] || {};
+      var cell = el('div', { 'class': 'col' }, [el('h3', { text: pair[1] })]);
+      valRow.appendChild(cell);
+      if (!c.pairs) { unavailable(cell, 'Correlation ' + pair[1]); return; }
+      table(cell, ['test mode', 'model mode', 'f test (Hz)', 'f model (Hz)', 'agreement %', 'MAC'],
+        c.pairs.map(function (p) {
+          return [p.test_mode, p.model_mode, fmt(p.test_frequency_hz, 1), fmt(p.model_frequency_hz, 1),
+            fmt(p.agreement_pct, 1), fmt(p.mac, 3)];
+        }));
+      if (c.summary) cell.appendChild(el('p', { 'class': 'note', text: 'mean agreement ' + fmt(c.summary.mean_agreement_pct, 1) +
+        ' %, min ' + fmt(c.summary.min_agreement_pct, 1) + ' %, mean MAC ' + fmt(c.summary.mean_mac, 3) +
+        '; unpaired test modes: ' + ((c.unpaired_test || []).length) + ', unpaired model modes: ' +
+        ((c.unpaired_model || []).length) }));
+    });
+
+    // Animated mode shapes on the test geometry.
+    var ms = section(wrap, 'Mode shapes — ' + setup.name,
+      'Test mode shapes animated on the test geometry (real part of the shape × cos ωt + imaginary part × sin ωt). ' +
+      'Drag to rotate.');
+    var sh = setup.shapes || {};
+    if (sh.modes && sh.modes.length && sh.nodes && sh.nodes.length) {
+      var modeSelect = el('select', { 'aria-label': 'mode' });
+      sh.modes.forEach(function (m, i) {
+        modeSelect.appendChild(el('option', { value: String(i), text: 'mode ' + (i + 1) + ': ' + fmt(m.frequency_hz, 1) +
+          ' Hz, ζ ' + fmt(100 * m.damping_ratio, 2) + ' %' }));
+      });
+      ms.appendChild(el('label', null, ['Mode: ', modeSelect]));
+      var span = 0;
+      ['x', 'y', 'z'].forEach(function (a) {
+        var v = sh.nodes.map(function (n) { return n[a]; });
+        span = Math.max(span, Math.max.apply(null, v) - Math.min.apply(null, v));
+      });
+      var amplitude = 0.25 * (span || 1);
+      var current = 0;
+      var phase = 0;
+      var positions = function (mode, t) {
+        var c = Math.cos(t), s = Math.sin(t);
+        var shape = sh.modes[mode].shape;
+        var xs = [], ys = [], zs = [], lx = [], ly = [], lz = [];
+        sh.nodes.forEach(function (n, i) {
+          var u = shape[i];
+          xs.push(n.x + amplitude * (u[0] * c - u[3] * s));
+          ys.push(n.y + amplitude * (u[1] * c - u[4] * s));
+          zs.push(n.z + amplitude * (u[2] * c - u[5] * s));
+        });
+        (sh.lines || []).forEach(function (l) {
+          lx.push(xs[l[0]], xs[l[1]], null); ly.push(ys[l[0]], ys[l[1]], null); lz.push(zs[l[0]], zs[l[1]], null);
+        });
+        return { xs: xs, ys: ys, zs: zs, lx: lx, ly: ly, lz: lz };
+      };
+      var undeformed = positions(0, Math.PI / 2);
+      var p0 = positions(0, 0);
+      var restX = sh.nodes.map(function (n) { return n.x; });
+      var restY = sh.nodes.map(function (n) { return n.y; });
+      var restZ = sh.nodes.map(function (n) { return n.z; });
+      var restL = { x: [], y: [], z: [] };
+      (sh.lines || []).forEach(function (l) {
+        restL.x.push(restX[l[0]], restX[l[1]], null); restL.y.push(restY[l[0]], restY[l[1]], null);
+        restL.z.push(restZ[l[0]], restZ[l[1]], null);
+      });
+      void undeformed;
+      var lim = function (v) { var lo = Math.min.apply(null, v), hi = Math.max.apply(null, v); return [lo - amplitude * 1.3, hi + amplitude * 1.3]; };
+      var shapeDiv = chart(ms, [
+        { type: 'scatter3d', mode: 'lines', name: 'at rest', x: restL.x, y: restL.y, z: restL.z,
+          line: { color: '#bbbbbb', width: 2 }, hoverinfo: 'skip' },
+        { type: 'scatter3d', mode: 'lines', name: 'deformed', x: p0.lx, y: p0.ly, z: p0.lz,
+          line: { color: '#2166ac', width: 5 }, hoverinfo: 'skip' },
+        { type: 'scatter3d', mode: 'markers', name: 'test points', x: p0.xs, y: p0.ys, z: p0.zs,
+          text: sh.nodes.map(function (n) { return 'node ' + n.id; }), hoverinfo: 'text',
+          marker: { size: 4, color: '#d6604d' } }
+      ], { height: 520, scene: { aspectmode: 'data', xaxis: { range: lim(restX), title: { text: 'X (m)' } },
+        yaxis: { range: lim(restY), title: { text: 'Y (m)' } }, zaxis: { range: lim(restZ), title: { text: 'Z (m)' } } },
+        margin: { l: 0, r: 0, t: 10, b: 10 } });
+      modeSelect.addEventListener('change', function () { current = Number(modeSelect.value); });
+      var animating = false;
+      var step = function () {
+        if (!shapeDiv.getAttribute('data-rendered') || animating) return;
+        animating = true;
+        phase += Math.PI / 12;
+        var p = positions(current, phase);
+        Plotly.restyle(shapeDiv, { x: [p.lx, p.xs], y: [p.ly, p.ys], z: [p.lz, p.zs] }, [1, 2])
+          .then(function () { animating = false; }, function () { animating = false; });
+      };
+      // '#still' in the URL (screenshots) keeps the shape at rest.
+      if (location.hash.indexOf('still') < 0) setInterval(step, 90);
+    } else {
+      unavailable(ms, 'Mode shapes on the test geometry');
+    }
+  });
+
+  // ---- diagnosis ----
+  var dg = section(main, 'Which physical effect is missing?',
+    'Every effect of the vocabulary fitted to all tests at once and ranked by an information criterion ' +
+    '(rank 1 = most likely missing effect).');
+  var diag = data.diagnosis || {};
+  if (diag.candidates && diag.candidates.length) {
+    var cands = diag.candidates.slice().sort(function (a, b) { return a.rank - b.rank; });
+    var name = function (c) { return '#' + c.rank + ' ' + c.kind + (c.target ? ' (' + c.target + ')' : ''); };
+    var shown = cands.slice(0, 12);
+    var baseErr = diag.baseline ? diag.baseline.mean_abs_frequency_error_pct : null;
+    var labels = shown.map(name).reverse();
+    var errs = shown.map(function (c) { return c.mean_abs_frequency_error_pct; }).reverse();
+    var bars = [{ type: 'bar', orientation: 'h', name: 'mean |frequency error| after fitting (%)', y: labels, x: errs,
+      marker: { color: shown.map(function (c) { return c.rank === 1 ? '#1b7837' : '#92c5de'; }).reverse() },
+      text: errs.map(function (e) { return fmt(e, 2) + ' %'; }), textposition: 'auto' }];
+    var dshapes = [];
+    if (baseErr !== null && baseErr !== undefined) {
+      dshapes.push({ type: 'line', x0: baseErr, x1: baseErr, yref: 'paper', y0: 0, y1: 1, line: { color: '#b2182b', dash: 'dash' } });
+    }
+    var row = el('div', { 'class': 'row' });
+    dg.appendChild(row);
+    var c1 = el('div', { 'class': 'col' }, [el('h3', { text: 'Ranking (dashed: the nominal model\'s error)' })]);
+    var c2 = el('div', { 'class': 'col' }, [el('h3', { text: 'The error falls' })]);
+    row.appendChild(c1);
+    row.appendChild(c2);
+    chart(c1, bars, { height: Math.max(300, 40 * shown.length + 100), xaxis: { title: { text: 'mean |frequency error| (%)' }, type: 'log' },
+      margin: { l: 260, r: 20, t: 10, b: 50 }, shapes: dshapes, showlegend: false }, 'half');
+
+    // Error falls: mean error of the nominal model, of the best candidate, and per-mode errors before/after.
+    var fallX = [], before = [], after = [];
+    (data.setups || []).forEach(function (setup) {
+      var b = (setup.correlation_before || {}).pairs || [];
+      var a = (setup.correlation_after || {}).pairs || [];
+      b.forEach(function (p) {
+        var q = a.filter(function (x) { return x.test_mode === p.test_mode; })[0];
+        fallX.push(setup.name + ' T' + p.test_mode);
+        before.push(100 - p.agreement_pct);
+        after.push(q ? 100 - q.agreement_pct : null);
+      });
+    });
+    var fall;
+    if (fallX.length) {
+      fall = [{ type: 'bar', name: 'nominal model', x: fallX, y: before, marker: { color: '#d6604d' } },
+        { type: 'bar', name: 'updated model (' + name(cands[0]) + ')', x: fallX, y: after, marker: { color: '#1b7837' } }];
+    } else {
+      fall = [{ type: 'bar', x: ['nominal model', name(cands[0])],
+        y: [baseErr, cands[0].mean_abs_frequency_error_pct], marker: { color: ['#d6604d', '#1b7837'] } }];
+    }
+    chart(c2, fall, { height: 360, barmode: 'group', yaxis: { title: { text: '100 − agreement (%)' }, type: 'log' },
+      xaxis: { tickangle: -45 } }, 'half');
+
+    var best = cands[0];
+    var params = best.parameters ? JSON.stringify(best.parameters) : '';
+    dg.appendChild(el('p', { 'class': 'verdict', text: 'Rank 1: ' + best.kind + (best.target ? ' on "' + best.target + '"' : '') +
+      ' ' + params + ' — mean |frequency error| ' + fmt(baseErr, 2) + ' % → ' + fmt(best.mean_abs_frequency_error_pct, 2) +
+      ' %, mean MAC ' + fmt(best.mean_mac, 3) + '.' }));
+    if (diag.explanation) dg.appendChild(el('p', { text: String(diag.explanation) }));
+    table(dg, ['rank', 'kind', 'target', 'parameters', 'mean |f error| %', 'mean MAC', 'score'], cands.map(function (c) {
+      return [c.rank, c.kind, c.target || '', c.parameters ? JSON.stringify(c.parameters) : '',
+        fmt(c.mean_abs_frequency_error_pct, 2), fmt(c.mean_mac, 3), fmt(c.score, 2)];
+    }), 'small');
+  } else {
+    unavailable(dg, 'Diagnosis');
+  }
+
+  if (data.files && data.files.length) {
+    var files = section(main, 'Files written by this run');
+    files.appendChild(el('ul', { 'class': 'files' }, data.files.map(function (f) { return el('li', null, [el('code', { text: f })]); })));
+  }
+
+  body.setAttribute('data-charts-expected', String(expected));
+  Promise.all(pending).then(function () {
+    body.setAttribute('data-charts-rendered', String(rendered));
+  }, function (e) { noteError(e); });
+})();

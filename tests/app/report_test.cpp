@@ -1,0 +1,236 @@
+// The HTML report of `ema run` on synthetic results with known truth: the data preparation (MAC,
+// FRF synthesis, stabilisation reading) against hand values, and the page in headless Chromium.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "browser_check.hpp"
+#include "report.hpp"
+
+namespace ema::report {
+namespace {
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+
+// A 3-mode system on 4 nodes × 3 directions (mass-normalised shapes), accelerance FRFs.
+struct Truth {
+  std::vector<double> f_hz{120.0, 185.0, 260.0};
+  std::vector<double> zeta{0.02, 0.015, 0.03};
+  std::vector<Node> nodes{{1, {0.0, 0.0, 0.0}}, {2, {0.2, 0.0, 0.0}}, {3, {0.2, 0.1, 0.0}}, {4, {0.0, 0.1, 0.05}}};
+  Eigen::MatrixXd shapes;  // 12 × 3
+  std::vector<Dof> dofs;
+  Truth() {
+    for (const Node& n : nodes)
+      for (int d = 1; d <= 3; ++d) dofs.push_back({n.id, d});
+    shapes.resize(12, 3);
+    for (int i = 0; i < 12; ++i)
+      for (int m = 0; m < 3; ++m) shapes(i, m) = 0.1 * std::cos(0.7 * (i + 1) * (m + 1)) + (m == i % 3 ? 0.15 : 0.0);
+  }
+  std::complex<double> H(int out, int ref, double f) const {
+    const double w = kTwoPi * f;
+    std::complex<double> h = 0.0;
+    for (int m = 0; m < 3; ++m) {
+      const double wr = kTwoPi * f_hz[m];
+      h += -w * w * shapes(out, m) * shapes(ref, m) / std::complex<double>(wr * wr - w * w, 2 * zeta[m] * wr * w);
+    }
+    return h;
+  }
+  json ModesJson(double frequency_factor, double shape_noise, unsigned seed) const {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0.0, shape_noise);
+    json modes = json::array();
+    for (int m = 0; m < 3; ++m) {
+      json shape = json::array();
+      for (int i = 0; i < 12; ++i)
+        shape.push_back({{"node", dofs[i].node}, {"dir", DirectionName(dofs[i].direction)},
+                         {"value", {shapes(i, m) * (1 + noise(rng)), 0.0}}});
+      modes.push_back({{"frequency_hz", f_hz[m] * frequency_factor}, {"damping_ratio", zeta[m]}, {"shape", shape}});
+    }
+    return {{"modes", modes}};
+  }
+};
+
+FrfSet MakeFrfs(const Truth& truth, double noise_level, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  FrfSet frfs;
+  const int lines = 401;
+  frfs.frequency_hz = Eigen::VectorXd::LinSpaced(lines, 0.0, 400.0);
+  frfs.outputs = truth.dofs;
+  frfs.references = {truth.dofs[2]};  // node 1 +Z
+  frfs.h.assign(1, Eigen::MatrixXcd(lines, 12));
+  for (int o = 0; o < 12; ++o)
+    for (int i = 0; i < lines; ++i) {
+      const std::complex<double> h = truth.H(o, 2, frfs.frequency_hz[i]);
+      frfs.h[0](i, o) = h * (1.0 + noise_level * std::complex<double>(noise(rng), noise(rng)));
+    }
+  return frfs;
+}
+
+json Correlation(const Truth& truth, double factor) {
+  json pairs = json::array();
+  double sum = 0.0;
+  for (int m = 0; m < 3; ++m) {
+    const double ft = truth.f_hz[m], fm = truth.f_hz[m] * factor;
+    const double agreement = 100.0 * (1.0 - std::abs(fm - ft) / fm);
+    sum += agreement;
+    pairs.push_back({{"test_mode", m + 1}, {"model_mode", m + 1}, {"test_frequency_hz", ft},
+                     {"model_frequency_hz", fm}, {"agreement_pct", agreement}, {"mac", 0.99}});
+  }
+  return {{"pairs", pairs}, {"unpaired_test", json::array()}, {"unpaired_model", json::array()},
+          {"summary", {{"mean_agreement_pct", sum / 3}, {"min_agreement_pct", sum / 3}, {"mean_mac", 0.99}}}};
+}
+
+ReportInput MakeInput() {
+  Truth truth;
+  SetupResults setup;
+  setup.name = "synthetic";
+  setup.frfs = MakeFrfs(truth, 0.01, 7);
+  setup.band_lo_hz = 60.0;
+  setup.band_hi_hz = 330.0;
+  setup.test_modes = truth.ModesJson(1.0, 0.02, 1);
+  setup.model_modes_before = truth.ModesJson(1.6, 0.05, 2);
+  setup.model_modes_after = truth.ModesJson(1.005, 0.02, 3);
+  setup.correlation_before = Correlation(truth, 1.6);
+  setup.correlation_after = Correlation(truth, 1.005);
+  // Stabilisation: true poles stable from order 6 on, plus a wandering spurious pole per order.
+  json orders = json::array();
+  for (int order = 2; order <= 40; order += 2) {
+    json poles = json::array();
+    for (int m = 0; m < 3; ++m)
+      if (order >= 2 * (m + 1))
+        poles.push_back({{"frequency_hz", truth.f_hz[m] * (1 + 0.002 / order)}, {"damping_ratio", truth.zeta[m]},
+                         {"status", order >= 6 ? "stable" : "unstable"}});
+    poles.push_back({{"frequency_hz", 70.0 + 6.5 * order}, {"damping_ratio", 0.08}, {"status", "unstable"}});
+    orders.push_back({{"order", order}, {"poles", poles}});
+  }
+  setup.stabilisation = {{"orders", orders}};
+  setup.geometry = truth.nodes;
+  setup.lines = {{1, 2}, {2, 3}, {3, 4}, {4, 1}};
+  setup.frf_summary = {{"frfs", {{{"response_node", 2}, {"response_dir", "+Z"}, {"reference_node", 1},
+                                  {"reference_dir", "+Z"}, {"averages", 4},
+                                  {"rejected", {{{"impact", 3}, {"reason", "double hit"}}}}}}}};
+  ReportInput input;
+  input.title = "Synthetic report";
+  input.subtitle = "tests/app/report_test.cpp";
+  input.summary = {"line one", "line two"};
+  input.setups.push_back(setup);
+  input.diagnosis = {
+      {"baseline", {{"mean_abs_frequency_error_pct", 37.5}, {"mean_mac", 0.97}}},
+      {"candidates",
+       {{{"rank", 1}, {"kind", "series_compliance"}, {"target", "bearings"}, {"parameters", {{"k", 3.2e6}}},
+         {"mean_abs_frequency_error_pct", 0.4}, {"mean_mac", 0.99}, {"score", -20.0}},
+        {{"rank", 2}, {"kind", "stiffness_scale"}, {"target", "bearings"}, {"parameters", {{"factor", 0.4}}},
+         {"mean_abs_frequency_error_pct", 6.1}, {"mean_mac", 0.98}, {"score", 3.0}}}}};
+  return input;
+}
+
+TEST(ReportData, MacByHand) {
+  // test shapes [1,0,0] and [1,1,0]; model shapes [1,1,0] and [0,0,1]:
+  // MAC([1,0,0],[1,1,0]) = 1/(1*2) = 0.5, MAC([1,1,0],[1,1,0]) = 1, anything with [0,0,1] = 0.
+  ShapeTable test, model;
+  test.dofs = model.dofs = {{1, 1}, {1, 2}, {1, 3}};
+  test.shapes = Eigen::MatrixXcd(3, 2);
+  test.shapes << 1, 1, 0, 1, 0, 0;
+  model.shapes = Eigen::MatrixXcd(3, 2);
+  model.shapes << 1, 0, 1, 0, 0, 1;
+  int shared = 0;
+  Eigen::MatrixXd mac = MacMatrix(test, model, &shared);
+  EXPECT_EQ(shared, 3);
+  EXPECT_NEAR(mac(0, 0), 0.5, 1e-12);
+  EXPECT_NEAR(mac(1, 0), 1.0, 1e-12);
+  EXPECT_NEAR(mac(0, 1), 0.0, 1e-12);
+  // Complex scaling of a shape leaves its MAC unchanged.
+  model.shapes.col(0) *= std::complex<double>(-0.3, 2.0);
+  EXPECT_NEAR(MacMatrix(test, model)(0, 0), 0.5, 1e-12);
+}
+
+TEST(ReportData, ShapeTableFoldsNegativeDirections) {
+  const json modes = {{"modes", {{{"frequency_hz", 10.0}, {"damping_ratio", 0.01},
+                                   {"shape", {{{"node", 5}, {"dir", "-Z"}, {"value", {2.0, 1.0}}},
+                                              {{"node", 5}, {"dir", "+X"}, {"value", {1.0, 0.0}}}}}}}}};
+  const ShapeTable t = ReadShapeTable(modes);
+  ASSERT_EQ(t.dofs.size(), 2u);
+  EXPECT_EQ(t.dofs[1], (Dof{5, 3}));
+  EXPECT_EQ(t.shapes(1, 0), std::complex<double>(-2.0, -1.0));  // -Z value stored negated under +Z
+}
+
+TEST(ReportData, SynthesisRecoversAnalyticFrf) {
+  // With the true poles and 1 % complex noise, the least-squares synthesis must sit within 3 % of
+  // the noise-free analytic FRF on every line of the band where |H| is above 5 % of its peak
+  // (3 % = the noise plus a margin for the residual terms absorbing a little of it).
+  Truth truth;
+  const FrfSet frfs = MakeFrfs(truth, 0.01, 11);
+  std::vector<std::complex<double>> poles;
+  for (int m = 0; m < 3; ++m) poles.push_back(FrequencyAndDampingToPole(truth.f_hz[m], truth.zeta[m]));
+  for (int o : {0, 5, 11}) {
+    const Eigen::VectorXcd fit = SynthesiseFrf(frfs.frequency_hz, frfs.h[0].col(o), poles, 60.0, 330.0);
+    double peak = 0.0;
+    for (int i = 0; i < frfs.LineCount(); ++i) peak = std::max(peak, std::abs(truth.H(o, 2, frfs.frequency_hz[i])));
+    int checked = 0;
+    for (int i = 0; i < frfs.LineCount(); ++i) {
+      const double f = frfs.frequency_hz[i];
+      if (f < 60.0 || f > 330.0) {
+        EXPECT_TRUE(std::isnan(fit[i].real()));
+        continue;
+      }
+      const std::complex<double> exact = truth.H(o, 2, f);
+      if (std::abs(exact) < 0.05 * peak) continue;
+      EXPECT_LT(std::abs(fit[i] - exact) / std::abs(exact), 0.03) << "output " << o << " at " << f << " Hz";
+      ++checked;
+    }
+    EXPECT_GT(checked, 100);
+  }
+}
+
+TEST(ReportData, StabilisationLayouts) {
+  const json nested = {{"orders", {{{"order", 4}, {"poles", {{{"frequency_hz", 100.0}, {"damping_ratio", 0.01},
+                                                              {"stable", true}}}}}}}};
+  const json flat = {{"poles", {{{"order", 6}, {"frequency_hz", 50.0}, {"damping_ratio", 0.02},
+                                 {"stable_frequency", true}, {"stable_damping", false}}}}};
+  const StabilisationPoints a = ReadStabilisation(nested), b = ReadStabilisation(flat);
+  ASSERT_EQ(a.order.size(), 1u);
+  EXPECT_EQ(a.order[0], 4);
+  EXPECT_EQ(a.status[0], "stable");
+  ASSERT_EQ(b.order.size(), 1u);
+  EXPECT_EQ(b.order[0], 6);
+  EXPECT_EQ(b.status[0], "unstable");  // damping not stable
+}
+
+TEST(Report, PageIsSelfContainedAndCarriesTheData) {
+  const std::string html = RenderHtml(MakeInput());
+  // No external resource: no src/href to http(s) in script or link tags.
+  EXPECT_EQ(html.find("<script src"), std::string::npos);
+  EXPECT_EQ(html.find("<link "), std::string::npos);
+  EXPECT_NE(html.find("plotly.js v"), std::string::npos);
+  const json data = BuildReportData(MakeInput());
+  ASSERT_EQ(data["setups"].size(), 1u);
+  EXPECT_EQ(data["setups"][0]["frf"]["frfs"].size(), 12u);
+  EXPECT_EQ(data["setups"][0]["mac_before"]["shared_dofs"], 12);
+  EXPECT_EQ(data["setups"][0]["shapes"]["modes"].size(), 3u);
+  EXPECT_EQ(data["setups"][0]["rejected"].size(), 1u);
+}
+
+TEST(Report, RendersInHeadlessChromium) {
+  if (!test::ChromiumAvailable()) GTEST_SKIP() << "chromium not installed (scripts/install-deps.sh --test)";
+  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "report_synthetic";
+  fs::create_directories(dir);
+  {
+    std::ofstream out(dir / "report.html", std::ios::binary);
+    out << RenderHtml(MakeInput());
+  }
+  const test::BrowserResult r = test::CheckInChromium(dir / "report.html", dir / "browser");
+  ASSERT_TRUE(r.ran);
+  EXPECT_EQ(r.page_errors, "");
+  EXPECT_EQ(r.console_errors, "");
+  // 1 stabilisation + 1 FRF + 2 MAC + 1 mode shape + 2 diagnosis charts.
+  EXPECT_EQ(r.expected, 7);
+  EXPECT_EQ(r.rendered, r.expected);
+  EXPECT_EQ(r.rendered_divs, r.expected);
+}
+
+}  // namespace
+}  // namespace ema::report
