@@ -97,7 +97,7 @@ class Reader {
       std::istringstream s(line);
       double a = 0, b = 0;
       if (!(s >> a >> b)) {
-        if (x->empty() && no == 1) continue;  // header
+        if (x->empty()) continue;  // header line(s) before the data
         throw InputError(f.string() + ":" + std::to_string(no), "expected two numbers 'x,y'");
       }
       x->push_back(a);
