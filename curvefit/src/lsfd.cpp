@@ -84,7 +84,7 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
         B(2 * (f * m + i), o) = h.real();
         B(2 * (f * m + i) + 1, o) = h.imag();
       }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(P);
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(P);  // blocked; columns are scaled and independent
   Eigen::MatrixXd X = qr.solve(B);
   const double err = (P * X - B).norm(), ref = B.norm();
   X = scale.asDiagonal() * X;

@@ -80,6 +80,46 @@ int PartialCholesky(const Eigen::MatrixXd& r, Eigen::MatrixXd* l_out) {
   return n;
 }
 
+/// Eigenvalues of the block companion matrix C (size m·p). C^T, with its indices reordered
+/// so that k·m + r -> r·p + k, is already upper Hessenberg in its leading p×p block and has only
+/// one spike column entering the trailing part; reducing just the trailing block to Hessenberg
+/// (and applying that similarity to the rows above) leaves a Hessenberg matrix for the QR
+/// iterations. For m = 1 no reduction at all is needed.
+Eigen::VectorXcd CompanionEigenvalues(const Eigen::MatrixXd& C, int m, int p) {
+  const int n = m * p;
+  Eigen::MatrixXd A(n, n);
+  for (int j = 0; j < n; ++j) {
+    const int cj = (j % p) * m + j / p;
+    for (int i = 0; i < n; ++i) A(i, j) = C(cj, (i % p) * m + i / p);  // A = P^T C^T P
+  }
+  if (m > 1 && p > 1) {
+    const int s = p - 1, k = n - s;
+    Eigen::HessenbergDecomposition<Eigen::MatrixXd> hd(A.bottomRightCorner(k, k));
+    const Eigen::MatrixXd top = A.topRightCorner(s, k) * hd.matrixQ();
+    A.topRightCorner(s, k) = top;
+    A.bottomRightCorner(k, k) = hd.matrixH();
+  }
+  for (int j = 0; j < n; ++j)
+    for (int i = j + 2; i < n; ++i) A(i, j) = 0.0;  // exact Hessenberg (rounding below)
+  Eigen::RealSchur<Eigen::MatrixXd> schur(n);
+  schur.computeFromHessenberg(A, Eigen::MatrixXd(), false);
+  const Eigen::MatrixXd& T = schur.matrixT();
+  Eigen::VectorXcd ev(n);
+  for (int i = 0; i < n;) {
+    if (i + 1 < n && T(i + 1, i) != 0.0) {  // 2×2 block: a complex pair
+      const double half = 0.5 * (T(i, i) - T(i + 1, i + 1));
+      const double z = std::sqrt(std::abs(half * half + T(i + 1, i) * T(i, i + 1)));
+      ev[i] = {T(i + 1, i + 1) + half, z};
+      ev[i + 1] = {T(i + 1, i + 1) + half, -z};
+      i += 2;
+    } else {
+      ev[i] = T(i, i);
+      ++i;
+    }
+  }
+  return ev;
+}
+
 }  // namespace
 
 int MaxSupportedOrder(const FitData& data) {
@@ -239,9 +279,8 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
       Eigen::MatrixXd C = Eigen::MatrixXd::Zero(na, na);
       for (int j = 0; j + 1 < p; ++j) C.block(j * m, (j + 1) * m, m, m).setIdentity();
       for (int j = 0; j < p; ++j) C.block((p - 1) * m, j * m, m, m) = -alpha.block(j * m, 0, m, m).transpose();
-      Eigen::EigenSolver<Eigen::MatrixXd> es(C, false);
+      const Eigen::VectorXcd z = CompanionEigenvalues(C, m, p);
       std::vector<Pole> poles;
-      const Eigen::VectorXcd& z = es.eigenvalues();
       // m = 1 vector test: shape B(Omega) = -(L^{-1} v)^T (Z alpha) with v = [1, Omega, .., Omega^p].
       Eigen::MatrixXd za;
       if (m == 1) {
