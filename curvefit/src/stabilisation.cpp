@@ -221,8 +221,17 @@ std::vector<SelectedPole> SelectPolesAuto(const StabilisationDiagram& diagram, c
     if (kept.empty()) kept = per_order;
     f.clear(), z.clear();
     for (const Pole* p : kept) f.push_back(p->frequency_hz), z.push_back(p->damping_ratio);
+    // Representative: the medoid of the upper half of the orders. The LS damping bias shrinks
+    // as the order grows (algorithms.md §2.11), so the converged end of the column is preferred.
+    std::vector<int> orders;
+    for (const Pole* p : kept) orders.push_back(p->order);
+    std::sort(orders.begin(), orders.end());
+    const int median_order = orders[orders.size() / 2];
+    std::vector<const Pole*> upper;
+    for (const Pole* p : kept)
+      if (p->order >= median_order) upper.push_back(p);
     SelectedPole s;
-    s.pole = *medoid_of(kept);
+    s.pole = *medoid_of(upper);
     s.frequency_spread_hz = StdDev(f);
     s.damping_spread = StdDev(z);
     s.cluster_size = static_cast<int>(per_order.size());
@@ -260,6 +269,17 @@ std::vector<SelectedPole> SelectPolesNear(const StabilisationDiagram& diagram, c
             best = &pole;
         }
       if (best) break;
+    }
+    if (best) {
+      // The nearest pole fixes the column; within it take the highest order (most converged).
+      const Pole* column_best = best;
+      for (const auto& p : diagram.orders)
+        for (const auto& pole : p)
+          if (pole.physical && pole.label == best->label &&
+              std::abs(pole.frequency_hz - best->frequency_hz) < 0.005 * best->frequency_hz &&
+              pole.order > column_best->order)
+            column_best = &pole;
+      best = column_best;
     }
     if (!best) {
       std::ostringstream msg;
