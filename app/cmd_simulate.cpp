@@ -79,6 +79,11 @@ class PlanReader {
       throw InputError(At(n), "key '" + key + "': '" + *text + "' is not a DOF such as \"101+Z\" (node, +X/-X/+Y/-Y/+Z/-Z)");
     return {std::stoi(text->substr(0, i)), dir};
   }
+  const toml::table& TableOf(const toml::node& n, const std::string& what) const {
+    const toml::table* t = n.as_table();
+    if (!t) throw InputError(At(n), what + " must be a table ([[" + what + "]])");
+    return *t;
+  }
   std::vector<Dof> DofList(const toml::node& n, const std::string& key) const {
     const toml::array* a = n.as_array();
     if (!a || a->empty()) throw InputError(At(n), "key '" + key + "': expected a non-empty array of DOF strings");
@@ -96,7 +101,7 @@ class PlanReader {
     }
     CheckKeys(root, {"plan", "set", "double_hit", "overload"}, "the plan file");
     const toml::table* p = root["plan"].as_table();
-    if (!p) throw InputError(file_, "missing [plan] table");
+    if (!p) throw InputError(file_, "missing [plan] table (references, sample_rate_hz, samples, ...)");
     CheckKeys(*p,
               {"references", "sample_rate_hz", "samples", "record_length_s", "pre_trigger", "impacts", "force_peak_n",
                "force_spread", "pulse_duration_s", "force_noise", "response_noise", "noise_relative_to_peak",
@@ -137,10 +142,15 @@ class PlanReader {
     if (const toml::node* s = p->get("setup")) plan.setup = s->value<std::string>().value_or("");
     const double default_mass = Number(*p, "sensor_mass", 0.0);
 
+    if (root.get("set") && !root["set"].as_array()) throw InputError(At(*root.get("set")), "'set' must be [[set]] tables");
+    if (root.get("double_hit") && !root["double_hit"].as_array())
+      throw InputError(At(*root.get("double_hit")), "'double_hit' must be [[double_hit]] tables");
+    if (root.get("overload") && !root["overload"].as_array())
+      throw InputError(At(*root.get("overload")), "'overload' must be [[overload]] tables");
     const toml::array* sets = root["set"].as_array();
     if (!sets || sets->empty()) throw InputError(file_, "the plan needs at least one [[set]] of sensors");
     for (const toml::node& node : *sets) {
-      const toml::table& t = *node.as_table();
+      const toml::table& t = TableOf(node, "set");
       CheckKeys(t, {"name", "sensors", "sensor_mass", "masses"}, "[[set]]");
       RovingSet set;
       set.name = t["name"].value<std::string>().value_or("set " + std::to_string(plan.sets.size() + 1));
@@ -154,6 +164,8 @@ class PlanReader {
         for (const auto& [k, v] : *m) {
           const std::string key(k.str());
           if (!v.is_number()) throw InputError(At(v), "[[set]] masses: expected a number for point " + key);
+          const bool digits = !key.empty() && key.find_first_not_of("0123456789") == std::string::npos;
+          if (!digits) throw InputError(At(v), "[[set]] masses: key '" + key + "' is not a test point id");
           set.masses[std::stoi(key)] = *v.value<double>();
         }
       plan.sets.push_back(std::move(set));
@@ -176,7 +188,7 @@ class PlanReader {
     };
     if (const toml::array* hits = root["double_hit"].as_array())
       for (const toml::node& node : *hits) {
-        const toml::table& t = *node.as_table();
+        const toml::table& t = TableOf(node, "double_hit");
         CheckKeys(t, {"set", "reference", "impact", "delay_s", "ratio"}, "[[double_hit]]");
         acquisition::DoubleHit d;
         d.set = set_index(t, "[[double_hit]]");
@@ -188,7 +200,7 @@ class PlanReader {
       }
     if (const toml::array* overloads = root["overload"].as_array())
       for (const toml::node& node : *overloads) {
-        const toml::table& t = *node.as_table();
+        const toml::table& t = TableOf(node, "overload");
         CheckKeys(t, {"set", "reference", "impact", "channel", "full_scale"}, "[[overload]]");
         acquisition::Clipping c;
         c.set = set_index(t, "[[overload]]");
