@@ -53,6 +53,37 @@ std::string Text(std::string_view s, int width, bool pad = true) {
   return out;
 }
 
+/// The units label, last field of 58 records 8-11: nothing follows it, so UTF-8 is safe
+/// (spec §1.4); Latin-1 bytes are converted to UTF-8; cut to `width` characters.
+std::string UnitsText(std::string_view s, int width) {
+  std::string utf8;
+  if (IsValidUtf8(s)) {
+    utf8 = std::string(s);
+  } else {
+    for (char c : s) {
+      const unsigned char u = static_cast<unsigned char>(c);
+      if (u < 0x80) {
+        utf8.push_back(c);
+      } else {
+        utf8.push_back(static_cast<char>(0xC0 | (u >> 6)));
+        utf8.push_back(static_cast<char>(0x80 | (u & 0x3F)));
+      }
+    }
+  }
+  std::string out;
+  int chars = 0;
+  for (size_t i = 0; i < utf8.size(); ++i) {
+    const unsigned char u = static_cast<unsigned char>(utf8[i]);
+    if ((u & 0xC0) != 0x80) {
+      if (chars == width) break;
+      ++chars;
+    }
+    if (u < 0x20) break;
+    out.push_back(utf8[i]);
+  }
+  return out;
+}
+
 /// A free-standing ID line (80A1): kept as given (UTF-8 allowed here), NONE when empty.
 std::string IdLine(std::string_view s) {
   std::string out;
@@ -188,7 +219,7 @@ void Write55(std::ostream& out, const Data55& d) {
 
 std::string AxisRecord(const Axis58& a) {
   return Int(a.specific_data_type, 10) + Int(a.length_exponent, 5) + Int(a.force_exponent, 5) +
-         Int(a.temperature_exponent, 5) + " " + Text(OrNone(a.label), 20) + " " + Text(OrNone(a.units), 20, false);
+         Int(a.temperature_exponent, 5) + " " + Text(OrNone(a.label), 20) + " " + UnitsText(OrNone(a.units), 20);
 }
 
 void Write58Header(std::ostream& out, const Function58& f) {
