@@ -79,13 +79,15 @@
 
     // Stabilisation diagram with the sum of FRFs on a second axis.
     var stab = section(wrap, 'Stabilisation diagram — ' + setup.name,
-      'Poles of every model order (filled: stable in frequency, damping and participation vector; open: not stable). ' +
+      'Poles of every model order (filled: stable in frequency, damping and participation vector; diamonds: stable ' +
+      'in frequency and one more criterion or frequency only; open circles: new or unstable; ×: non-physical). ' +
       'Dashed lines: the modes selected automatically. Grey: sum of all FRF magnitudes. Drag to zoom, double-click to reset.');
     var st = setup.stabilisation || {};
     if (st.order && st.order.length) {
       var groups = {};
       st.status.forEach(function (s, i) {
-        var key = s === 'stable' ? 'stable' : (s === 'non-physical' ? 'non-physical' : 'unstable');
+        var key = s === 'stable' ? 'stable' : s === 'non-physical' ? 'non-physical' :
+          (s === 'f' || s === 'd' || s === 'v') ? 'partly stable' : 'unstable';
         groups[key] = groups[key] || { x: [], y: [], text: [] };
         groups[key].x.push(st.frequency_hz[i]);
         groups[key].y.push(st.order[i]);
@@ -94,6 +96,7 @@
       });
       var style = {
         stable: { symbol: 'circle', color: '#1b7837', size: 7 },
+        'partly stable': { symbol: 'diamond-open', color: '#4393c3', size: 6 },
         unstable: { symbol: 'circle-open', color: '#d6604d', size: 6 },
         'non-physical': { symbol: 'x-thin-open', color: '#999999', size: 5 }
       };
@@ -181,10 +184,10 @@
       var cell = el('div', { 'class': 'col' }, [el('h3', { text: pair[1] })]);
       valRow.appendChild(cell);
       if (!c.pairs) { unavailable(cell, 'Correlation ' + pair[1]); return; }
-      table(cell, ['test mode', 'model mode', 'f test (Hz)', 'f model (Hz)', 'agreement %', 'MAC'],
+      table(cell, ['test mode', 'model mode', 'f test (Hz)', 'ζ test (%)', 'f model (Hz)', 'agreement %', 'MAC', 'remark'],
         c.pairs.map(function (p) {
-          return [p.test_mode, p.model_mode, fmt(p.test_frequency_hz, 1), fmt(p.model_frequency_hz, 1),
-            fmt(p.agreement_pct, 1), fmt(p.mac, 3)];
+          return [p.test_mode, p.model_mode, fmt(p.test_frequency_hz, 1), fmt(100 * p.test_damping_ratio, 2),
+            fmt(p.model_frequency_hz, 1), fmt(p.agreement_pct, 1), fmt(p.mac, 3), p.remark || ''];
         }));
       if (c.summary) cell.appendChild(el('p', { 'class': 'note', text: 'mean agreement ' + fmt(c.summary.mean_agreement_pct, 1) +
         ' %, min ' + fmt(c.summary.min_agreement_pct, 1) + ' %, mean MAC ' + fmt(c.summary.mean_mac, 3) +

@@ -150,7 +150,11 @@ StabilisationPoints ReadStabilisation(const json& stabilisation) {
     if (!std::isfinite(f)) return;
     const int pole_order = pole.contains("order") && pole["order"].is_number() ? pole["order"].get<int>() : order;
     std::string status;
-    if (pole.contains("status") && pole["status"].is_string()) {
+    if (pole.contains("label") && pole["label"].is_string()) {
+      // ema fit's letters: s = stable in frequency, damping and vector; f, d, v = partly; o = new.
+      const std::string label = pole["label"].get<std::string>();
+      status = label == "s" ? "stable" : label == "o" ? "unstable" : label;
+    } else if (pole.contains("status") && pole["status"].is_string()) {
       status = pole["status"].get<std::string>();
     } else if (pole.contains("stable") && pole["stable"].is_boolean()) {
       status = pole["stable"].get<bool>() ? "stable" : "unstable";

@@ -26,8 +26,8 @@ HALF_Y = 0.05  # m, half width of the carriage at the lateral pads
 HALF_Z = 0.04  # m, pad plane height of the vertical pads
 
 # Air film load-lift curve (25 mm pad, 5 bar).
-K5, L1, L2, FR = 23.0e6, 1.0e-6, 6.0e-6, 0.7
-HERTZ_E, HERTZ_R = 58.0e9, 1.6e-3
+K5, L1, L2, FR = 23.0e6, 1.5e-6, 30.0e-6, 0.9
+HERTZ_E, HERTZ_R = 58.0e9, 8.29e-3
 
 
 def load(h):
