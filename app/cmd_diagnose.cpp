@@ -1,7 +1,227 @@
+// ema diagnose MODEL.toml --test [SETUP=]MODES.unv [--test SETUP2=MODES2.unv ...]
+//               [--json DIAG.json] [-o UPDATED.toml] [--force-level F=MODES.unv ...]
+// Ranks the physical effects the model is missing (cli.md, issue 7).
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
 #include "cli.hpp"
+#include "ema/core/error.hpp"
+#include "ema/correlation/diagnose.hpp"
+#include "ema/formats/atomic_file.hpp"
+#include "ema/formats/io.hpp"
+#include "ema/formats/model_file.hpp"
+#include "ema/model/effects.hpp"
 
 namespace ema {
+namespace {
 
-int RunDiagnose(const std::vector<std::string>& /*args*/) { return cli::NotBuiltYet("diagnose", "issue 7"); }
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+json Number(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
+
+// "[SETUP=]PATH": the part before the first '=' is a setup name unless the whole text is an
+// existing file (file names may contain '=').
+std::pair<std::string, std::string> SplitSetup(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || fs::exists(text)) return {"", text};
+  return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+json EffectJson(const model::Effect& e) {
+  json out = {{"kind", e.kind}, {"target", e.target}, {"parameters", json::object()}};
+  for (const auto& [k, v] : e.parameters) out["parameters"][k] = v;
+  if (e.law) out["law"] = formats::LawToToml(*e.law);
+  return out;
+}
+
+json CandidateJson(const correlation::Candidate& c) {
+  json out = {{"rank", c.rank},
+              {"kind", c.kind},
+              {"target", c.target},
+              {"parameters", json::object()},
+              {"uncertainty", json::object()},
+              {"mean_abs_frequency_error_pct", Number(c.mean_abs_frequency_error_pct)},
+              {"mean_mac", Number(c.mean_mac)},
+              {"score", Number(c.score)},
+              {"cost", Number(c.cost)},
+              {"explained_pct", Number(c.explained_pct)},
+              {"paired_modes", c.paired_modes},
+              {"plausible", c.plausible},
+              {"tied_with", c.tied_with},
+              {"description", correlation::DescribeCandidate(c)},
+              {"effects", json::array()}};
+  const bool pair = c.effects.size() > 1;
+  for (const auto& p : c.parameters) {
+    const std::string key = pair ? p.effect_kind + "." + p.name : p.name;
+    out["parameters"][key] = p.value;
+    out["uncertainty"][key] = Number(p.sigma);
+    if (p.at_bound) out["at_bound"].push_back(key);
+  }
+  for (const auto& e : c.effects) out["effects"].push_back(EffectJson(e));
+  if (!c.error.empty()) out["error"] = c.error;
+  return out;
+}
+
+std::string Fixed(double v, int digits) {
+  if (!std::isfinite(v)) return "–";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, v);
+  return buffer;
+}
+
+// Before/after table: every test mode of every setup, the baseline and rank-1 partners.
+std::string ModeTable(const correlation::Candidate& before, const correlation::Candidate& after, json* rows) {
+  std::ostringstream out;
+  out << "| setup | test mode | test f [Hz] | model f before [Hz] | agreement before [%] | MAC before | "
+         "model f after [Hz] | agreement after [%] | MAC after |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (size_t i = 0; i < before.modes.size() && i < after.modes.size(); ++i) {
+    const auto& b = before.modes[i];
+    const auto& a = after.modes[i];
+    out << "| " << (b.setup.empty() ? "nominal" : b.setup) << " | " << b.test_mode + 1 << " | "
+        << Fixed(b.test_frequency_hz, 1) << " | " << Fixed(b.model_frequency_hz, 1) << " | "
+        << Fixed(b.agreement_pct, 1) << " | " << Fixed(b.mac, 3) << " | " << Fixed(a.model_frequency_hz, 1) << " | "
+        << Fixed(a.agreement_pct, 1) << " | " << Fixed(a.mac, 3) << " |\n";
+    rows->push_back({{"setup", b.setup},
+                     {"test_mode", b.test_mode + 1},
+                     {"test_frequency_hz", b.test_frequency_hz},
+                     {"model_frequency_hz_before", Number(b.model_frequency_hz)},
+                     {"agreement_pct_before", Number(b.agreement_pct)},
+                     {"mac_before", Number(b.mac)},
+                     {"model_frequency_hz_after", Number(a.model_frequency_hz)},
+                     {"agreement_pct_after", Number(a.agreement_pct)},
+                     {"mac_after", Number(a.mac)}});
+  }
+  return out.str();
+}
+
+}  // namespace
+
+int RunDiagnose(const std::vector<std::string>& args) {
+  namespace po = cli::po;
+  const std::string usage =
+      "ema diagnose MODEL.toml --test [SETUP=]MODES.unv [--test SETUP2=MODES2.unv ...] [--json DIAG.json] "
+      "[-o UPDATED.toml]";
+  po::options_description options("options");
+  std::string model_path, json_path, out_path, criterion = "bic";
+  std::vector<std::string> tests, force_levels;
+  bool no_pairs = false;
+  correlation::DiagnoseOptions dopt;
+  options.add_options()("model", po::value(&model_path)->required(), "model file (.toml)")(
+      "test", po::value(&tests)->required()->composing(),
+      "test modes (UFF 55) of one setup, as SETUP=MODES.unv (or MODES.unv for the nominal model); repeat per setup")(
+      "json", po::value(&json_path), "write the ranking as JSON (DIAG.json)")(
+      "output,o", po::value(&out_path), "write the model with the rank-1 effect(s) added as [[effect]] blocks")(
+      "criterion", po::value(&criterion)->default_value("bic"), "information criterion: bic or aicc")(
+      "shape-weight", po::value(&dopt.shape_weight)->default_value(0.1), "weight of (1 - MAC) against relative Δf")(
+      "mac-min", po::value(&dopt.pairing.mac_min)->default_value(0.5), "minimum MAC of a pair while fitting")(
+      "no-pairs", po::bool_switch(&no_pairs), "do not try pairs of effects")(
+      "force-level", po::value(&force_levels)->composing(),
+      "modes fitted at one impact force level, as FORCE_N=MODES.unv; two or more flag amplitude-dependent "
+      "stiffness");
+  cli::AddHelp(&options);
+  po::positional_options_description positional;
+  positional.add("model", 1);
+  po::variables_map vm;
+  if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  if (criterion == "bic") {
+    dopt.criterion = correlation::InformationCriterion::kBic;
+  } else if (criterion == "aicc") {
+    dopt.criterion = correlation::InformationCriterion::kAicc;
+  } else {
+    throw UsageError("--criterion must be bic or aicc, got '" + criterion + "'");
+  }
+  if (no_pairs) dopt.pair_pool = 0;
+  if (force_levels.size() == 1) throw UsageError("--force-level needs at least two levels");
+
+  const model::Model model = formats::ReadModelFile(model_path);
+  std::vector<correlation::SetupModes> sets;
+  for (const std::string& t : tests) {
+    auto [setup, path] = SplitSetup(t);
+    ModeSet modes = formats::ReadModeSet(path);
+    if (modes.source.empty()) modes.source = path;
+    sets.push_back({setup, std::move(modes)});
+  }
+  dopt.progress = [](double f, std::string_view stage) { cli::DrawProgress(f, std::string(stage)); };
+  const correlation::Diagnosis d = correlation::Diagnose(model, sets, dopt);
+
+  json out;
+  out["baseline"] = {{"mean_abs_frequency_error_pct", Number(d.baseline.mean_abs_frequency_error_pct)},
+                     {"mean_mac", Number(d.baseline.mean_mac)},
+                     {"score", Number(d.baseline.score)},
+                     {"cost", Number(d.baseline.cost)},
+                     {"paired_modes", d.baseline.paired_modes}};
+  out["candidates"] = json::array();
+  for (const auto& c : d.candidates) out["candidates"].push_back(CandidateJson(c));
+  out["criterion"] = criterion;
+  out["residual_count"] = d.residual_count;
+  out["test_modes"] = d.test_mode_count;
+  out["model_solves"] = d.model_solves;
+  out["explanation"] = d.explanation;
+  json mode_rows = json::array();
+  const correlation::Candidate& first = d.candidates.front();
+
+  std::cout << d.explanation << "\n\n| rank | candidate | parameters | mean |Δf| [%] | mean MAC | score |\n"
+            << "|---:|---|---|---:|---:|---:|\n";
+  for (const auto& c : d.candidates) {
+    std::string params;
+    for (const auto& p : c.parameters) {
+      char buffer[96];
+      std::snprintf(buffer, sizeof buffer, "%s%s=%.4g±%.2g", params.empty() ? "" : ", ", p.name.c_str(), p.value,
+                    p.sigma);
+      params += buffer;
+      if (p.at_bound) params += " (at bound)";
+    }
+    std::cout << "| " << c.rank << " | " << c.kind << (c.target.empty() ? "" : " of " + c.target) << " | "
+              << (c.error.empty() ? params : "failed: " + c.error) << " | "
+              << Fixed(c.mean_abs_frequency_error_pct, 2) << " | " << Fixed(c.mean_mac, 3) << " | "
+              << Fixed(c.score, 1) << " |\n";
+  }
+  std::cout << "\nBefore/after (" << (first.kind == "none" ? "no effect" : correlation::DescribeCandidate(first))
+            << "):\n\n"
+            << ModeTable(d.baseline, first, &mode_rows);
+  out["modes"] = mode_rows;
+
+  if (!force_levels.empty()) {
+    std::vector<correlation::ForceLevelModes> levels;
+    for (const std::string& level : force_levels) {
+      const auto eq = level.find('=');
+      if (eq == std::string::npos) throw UsageError("--force-level expects FORCE_N=MODES.unv, got '" + level + "'");
+      double force = 0.0;
+      try {
+        force = std::stod(level.substr(0, eq));
+      } catch (const std::exception&) {
+        throw UsageError("--force-level: '" + level.substr(0, eq) + "' is not a force in N");
+      }
+      ModeSet modes = formats::ReadModeSet(level.substr(eq + 1));
+      if (modes.source.empty()) modes.source = level.substr(eq + 1);
+      levels.push_back({force, std::move(modes)});
+    }
+    const correlation::NonlinearityReport nl = correlation::DetectAmplitudeDependence(levels);
+    json modes = json::array();
+    for (const auto& t : nl.modes)
+      modes.push_back({{"reference_mode", t.reference_mode + 1},
+                       {"force_n", t.force_n},
+                       {"frequency_hz", t.frequency_hz},
+                       {"change_pct", t.change_pct},
+                       {"slope_pct_per_decade", t.slope_pct_per_decade},
+                       {"threshold_pct", t.threshold_pct},
+                       {"flagged", t.flagged},
+                       {"trend", t.trend}});
+    out["nonlinearity"] = {{"flagged", nl.any_flagged}, {"summary", nl.summary}, {"modes", modes}};
+    std::cout << "\n" << nl.summary << "\n";
+  }
+
+  if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, out.dump(2) + "\n");
+  if (!out_path.empty()) {
+    if (first.effects.empty())
+      std::cerr << "ema diagnose: rank 1 is 'none': " << out_path << " is the model without an added effect\n";
+    formats::WriteModelWithEffects(model_path, out_path, first.effects);
+  }
+  return 0;
+}
 
 }  // namespace ema

@@ -18,7 +18,7 @@ void CheckModeSet(const ModeSet& set, const char* role) {
   if (set.modes.empty()) throw InputError(where, std::string("no modes found; expected at least one ") + role + " mode");
   for (size_t m = 0; m < set.modes.size(); ++m)
     if (set.modes[m].shape.size() != static_cast<Eigen::Index>(set.dofs.size()))
-      throw InputError(where, "mode " + std::to_string(m + 1) + " has " + std::to_string(set.modes[m].shape.size()) +
+      throw InputError(where, std::string("mode ") + std::to_string(m + 1) + " has " + std::to_string(set.modes[m].shape.size()) +
                                   " shape values, expected one per DOF (" + std::to_string(set.dofs.size()) + ")");
 }
 
@@ -55,7 +55,7 @@ CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const Cor
     std::string example = test.dofs.empty() ? "none" : DofName(test.dofs.front());
     std::string model_example = model.dofs.empty() ? "none" : DofName(model.dofs.front());
     throw InputError(SourceName(test, "test"),
-                     "no DOF shared with the model " + SourceName(model, "model") + " (test has " +
+                     std::string("no DOF shared with the model ") + SourceName(model, "model") + " (test has " +
                          std::to_string(test.dofs.size()) + " DOFs, e.g. " + example + "; model has " +
                          std::to_string(model.dofs.size()) + ", e.g. " + model_example +
                          "); expected test nodes that the model defines (same id, an id map, or a node within "
@@ -149,7 +149,7 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
                     Fixed(row.frequency_error_pct, 1), Fixed(row.mac, 3), row.remark});
   }
   std::ostringstream out;
-  const std::string summary = "Shared DOFs: " + std::to_string(result.shared_dof_count) + " of " +
+  const std::string summary = std::string("Shared DOFs: ") + std::to_string(result.shared_dof_count) + " of " +
                               std::to_string(result.test_dof_count) + " test DOFs; " +
                               std::to_string(result.pairing.pairs.size()) + " pairs, mean agreement " +
                               Fixed(result.mean_agreement_pct, 1) + " %, min " + Fixed(result.min_agreement_pct, 1) +
@@ -174,7 +174,14 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
       // Plain ASCII headers for spreadsheets.
       out << "mode,model_frequency_hz,test_frequency_hz,test_damping_pct,agreement_pct,frequency_error_pct,mac,remark\n";
       for (const auto& r : body) {
-        for (size_t k = 0; k < r.size(); ++k) out << (k ? "," : "") << (k + 1 == r.size() ? "\"" + r[k] + "\"" : r[k]);
+        for (size_t k = 0; k < r.size(); ++k) {
+          if (k) out << ',';
+          if (k + 1 == r.size()) {
+            out << '"' << r[k] << '"';  // the remark may hold commas
+          } else {
+            out << r[k];
+          }
+        }
         out << '\n';
       }
       out << "\ndof,comac\n";

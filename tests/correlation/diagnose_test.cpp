@@ -221,7 +221,9 @@ TEST(Diagnose, TwoSetupsSeparateSeriesComplianceFromStiffnessScale) {
   // The stiffness scale now pays for not fitting both settings: well behind (> 10 in BIC,
   // "very strong" evidence).
   for (const Candidate& c : two.candidates)
-    if (c.kind == "stiffness_scale" && c.target == "bearings") EXPECT_GT(c.score - best.score, 10.0);
+    if (c.kind == "stiffness_scale" && c.target == "bearings") {
+      EXPECT_GT(c.score - best.score, 10.0);
+    }
   EXPECT_TRUE(best.tied_with.empty()) << two.explanation;
 }
 
@@ -238,8 +240,11 @@ TEST(Diagnose, PairReportedOnlyWhenItBeatsTheBestSingle) {
     EXPECT_GT(c.score, first.score);
   }
   for (const FittedParameter& p : first.parameters) {
-    if (p.effect_kind == "mass_scale") EXPECT_NEAR(p.value, 1.3, 0.05 * 1.3);
-    if (p.effect_kind == "stiffness_scale") EXPECT_NEAR(p.value, 0.6, 0.05 * 0.6);
+    if (p.effect_kind == "mass_scale") {
+      EXPECT_NEAR(p.value, 1.3, 0.05 * 1.3);
+    } else if (p.effect_kind == "stiffness_scale") {
+      EXPECT_NEAR(p.value, 0.6, 0.05 * 0.6);
+    }
   }
 }
 
