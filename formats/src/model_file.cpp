@@ -12,6 +12,7 @@
 #include "ema/core/types.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/matrix_market.hpp"
+#include "ema/model/air_film.hpp"
 
 namespace ema::formats {
 namespace {
@@ -141,9 +142,30 @@ class Reader {
       return law;
     }
     if (kind == "air_film") {
-      CheckKeys(b, {"gap", "load", "file", "operating_gap"}, ctx);
+      CheckKeys(b, {"gap", "load", "file", "operating_gap", "pad"}, ctx);
       model::AirFilmLaw law;
       if (const auto* f = b.get("file")) ReadCurve(*f, &law.gap, &law.load);
+      if (const auto* pad_node = b.get("pad")) {
+        // Load-lift curve from pad geometry (thesis section 6.2.1, docs/model.md).
+        const toml::table& p = Table(*pad_node, "pad");
+        CheckKeys(p, {"diameter", "thickness", "permeability", "supply_pressure", "ambient_pressure", "gap_min",
+                      "gap_max", "points"},
+                  ctx + " pad");
+        model::PorousPad pad;
+        pad.diameter = Number(Require(p, "diameter", ctx + " pad"), "diameter");
+        pad.thickness = Number(Require(p, "thickness", ctx + " pad"), "thickness");
+        pad.permeability = Number(Require(p, "permeability", ctx + " pad"), "permeability");
+        pad.supply_pressure = Number(Require(p, "supply_pressure", ctx + " pad"), "supply_pressure");
+        pad.ambient_pressure = NumberOr(p, "ambient_pressure", pad.ambient_pressure);
+        pad.gap_min = NumberOr(p, "gap_min", pad.gap_min);
+        pad.gap_max = NumberOr(p, "gap_max", pad.gap_max);
+        pad.points = static_cast<int>(NumberOr(p, "points", pad.points));
+        try {
+          law = model::PorousPadCurve(pad, 0.0);
+        } catch (const InputError& e) {
+          throw InputError(At(*pad_node), e.what());
+        }
+      }
       if (const auto* g = b.get("gap")) {
         if (g->is_array()) law.gap = Numbers(*g, "gap");
         else law.operating_gap = Number(*g, "gap");
