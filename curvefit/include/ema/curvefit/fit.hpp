@@ -28,11 +28,12 @@ struct FitOptions {
   PeakOptions peak;
 };
 
+/// Seconds; stage figures are CPU times of the calling thread (see PolymaxTiming).
 struct FitTiming {
   PolymaxTiming polymax;
   double stabilisation_and_selection = 0.0;
   double lsfd = 0.0;
-  double total = 0.0;
+  double total = 0.0;  ///< wall
 };
 
 struct FitResult {

@@ -53,14 +53,18 @@ struct StabilisationDiagram {
   std::vector<std::string> warnings;
 };
 
-/// Wall-clock split of one estimation (seconds).
+/// Split of one estimation in seconds. CPU times are per-thread CPU clocks (summed over the
+/// worker threads), which stay meaningful on a busy machine; wall times are elapsed time.
 struct PolymaxTiming {
-  double normal_equations = 0.0;  ///< FFT lag sums, Toeplitz blocks, Cholesky, elimination
-  double solves = 0.0;            ///< per-order constrained LS solves for alpha
-  double eigenvalues = 0.0;       ///< companion eigenproblems + participation vectors
-  double solve_and_eigen_wall = 0.0;  ///< wall time of the (threaded) per-order stage;
-                                      ///< `solves` and `eigenvalues` are summed thread times
+  double normal_equations = 0.0;  ///< CPU: FFT lag sums, Toeplitz blocks, Cholesky, elimination
+  double solves = 0.0;            ///< CPU: per-order constrained LS solves for alpha
+  double eigenvalues = 0.0;       ///< CPU: companion eigenproblems + participation vectors
+  double normal_equations_wall = 0.0;
+  double solve_and_eigen_wall = 0.0;  ///< wall time of the (threaded) per-order stage
 };
+
+/// CPU time of the calling thread (seconds).
+double ThreadCpuSeconds();
 
 /// Runs pLSCF on `data` for orders order_min..order_max. Throws InputError when there are fewer
 /// lines than the requested order needs.
