@@ -59,7 +59,7 @@ void PlotStabilisation(const std::filesystem::path& path, const curvefit::Stabil
     plscol0(8, 90, 90, 90);     // sum FRF
     plinit();
     pladv(0);
-    plvpor(0.07, 0.91, 0.1, 0.9);
+    plvpor(0.07, 0.91, 0.12, 0.9);
     plwind(f_lo, f_hi, 0.0, y_top);
     plcol0(1);
     plbox("bcnst", 0.0, 0, "bnstv", 0.0, 0);
