@@ -146,8 +146,19 @@
       unavailable(fs, 'FRFs');
     }
     if (setup.rejected && setup.rejected.length) {
-      fs.appendChild(el('p', { text: 'Impacts rejected by the quality checks:' }));
-      table(fs, ['FRF', 'impact', 'reason'], setup.rejected.map(function (r) { return [r.frf, r.impact, r.reason]; }), 'small');
+      // One row per rejected impact and reason, with the FRFs it was dropped from.
+      var byImpact = {};
+      var order = [];
+      setup.rejected.forEach(function (r) {
+        var ref = String(r.frf).split(' / ')[1] || '';
+        var key = ref + '|' + r.impact + '|' + r.reason;
+        if (!byImpact[key]) { byImpact[key] = { ref: ref, impact: r.impact, reason: r.reason, n: 0 }; order.push(key); }
+        byImpact[key].n += 1;
+      });
+      fs.appendChild(el('p', { text: 'Impacts rejected by the quality checks (never dropped silently):' }));
+      table(fs, ['reference', 'impact', 'FRFs affected', 'reason'], order.map(function (k) {
+        var r = byImpact[k]; return [r.ref, r.impact, r.n, r.reason];
+      }), 'small');
     }
 
     // MAC matrices.
@@ -170,7 +181,7 @@
         });
       });
       chart(cell, [{ type: 'heatmap', z: z, x: m.model, y: m.test.slice().reverse(), zmin: 0, zmax: 1,
-        colorscale: 'Blues', colorbar: { title: { text: 'MAC' } } }],
+        colorscale: [[0, '#f7fbff'], [0.5, '#6baed6'], [1, '#08306b']], colorbar: { title: { text: 'MAC' } } }],
         { height: 380, annotations: annotations, margin: { l: 110, r: 20, t: 20, b: 90 } }, 'half');
     });
 

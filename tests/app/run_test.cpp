@@ -1,0 +1,171 @@
+// `ema run` end to end on the guideway sample (samples/guideway): the hidden mount compliance is
+// found, the updated model agrees with the test, the report renders, and the sample is untouched.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "browser_check.hpp"
+#include "ema/core/error.hpp"
+#include "project_file.hpp"
+
+namespace ema {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+const fs::path kSample = fs::path(EMA_SOURCE_DIR) / "samples" / "guideway";
+
+// FNV-1a of every file under `dir`, by relative path: enough to see any change to the sample.
+std::map<std::string, std::uint64_t> HashTree(const fs::path& dir) {
+  std::map<std::string, std::uint64_t> out;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (!entry.is_regular_file()) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::uint64_t h = 1469598103934665603ull;
+    char buffer[65536];
+    while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+      for (std::streamsize i = 0; i < in.gcount(); ++i) h = (h ^ static_cast<unsigned char>(buffer[i])) * 1099511628211ull;
+      if (!in) break;
+    }
+    out[fs::relative(entry.path(), dir).string()] = h;
+  }
+  return out;
+}
+
+json Load(const fs::path& path) {
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << path;
+  return in ? json::parse(in) : json();
+}
+
+int RunEma(const std::string& args, const fs::path& log) {
+  const std::string command = std::string(EMA_EXECUTABLE) + " " + args + " > '" + log.string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// One run of the sample shared by the tests below (it takes a few seconds).
+class GuidewayRun : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    out_ = new fs::path(fs::path(EMA_TEST_TMP_DIR) / "guideway-run");
+    fs::remove_all(*out_);
+    before_ = new std::map<std::string, std::uint64_t>(HashTree(kSample));
+    exit_code_ = RunEma("run '" + (kSample / "project.toml").string() + "' -o '" + out_->string() + "'",
+                     fs::path(EMA_TEST_TMP_DIR) / "guideway-run.log");
+  }
+  static void TearDownTestSuite() {
+    delete out_;
+    delete before_;
+  }
+  static fs::path* out_;
+  static std::map<std::string, std::uint64_t>* before_;
+  static int exit_code_;
+};
+fs::path* GuidewayRun::out_ = nullptr;
+std::map<std::string, std::uint64_t>* GuidewayRun::before_ = nullptr;
+int GuidewayRun::exit_code_ = -1;
+
+TEST_F(GuidewayRun, CompletesAndKeepsEveryIntermediateFile) {
+  ASSERT_EQ(exit_code_, 0) << std::ifstream(fs::path(EMA_TEST_TMP_DIR) / "guideway-run.log").rdbuf();
+  for (const char* test : {"stud-5um", "stud-9um"})
+    for (const char* file : {"frf.unv", "frf.json", "modes.unv", "modes.json", "stabilisation.json", "model-before.json",
+                             "correlation-before.json", "correlation-before.md", "model-after.json",
+                             "correlation-after.json", "correlation-after.md"})
+      EXPECT_TRUE(fs::is_regular_file(*out_ / test / file)) << test << "/" << file;
+  for (const char* file : {"diagnosis.json", "updated-model.toml", "report.html", "summary.txt"})
+    EXPECT_TRUE(fs::is_regular_file(*out_ / file)) << file;
+}
+
+TEST_F(GuidewayRun, RanksTheMountComplianceFirst) {
+  ASSERT_EQ(exit_code_, 0);
+  const json diagnosis = Load(*out_ / "diagnosis.json");
+  ASSERT_FALSE(diagnosis["candidates"].empty());
+  const json& best = diagnosis["candidates"][0];
+  EXPECT_EQ(best["rank"], 1);
+  EXPECT_EQ(best["kind"], "series_compliance");
+  EXPECT_EQ(best["target"], "bearings");
+  // The truth (truth/model.toml) is the air film in series with a Hertz ball joint at each pad.
+  // Linearised at the two settings it behaves like the nominal air film in series with a linear
+  // spring of ~15 N/um (the chain re-solved with that spring: make_sample.py's design gives
+  // 15.4 N/um as the best single k for both setups). Accept 20 %: the roving 11.2 g sensors load
+  // the carriage differently in each set, which the fitted k absorbs.
+  double k = 0.0;
+  for (const auto& [key, value] : best["parameters"].items())
+    if (value.is_number() && value.get<double>() > 1e5) k = value.get<double>();
+  EXPECT_NEAR(k, 15.4e6, 0.2 * 15.4e6);
+}
+
+TEST_F(GuidewayRun, UpdatedModelAgreesWithBothSetups) {
+  ASSERT_EQ(exit_code_, 0);
+  for (const char* test : {"stud-5um", "stud-9um"}) {
+    const json before = Load(*out_ / test / "correlation-before.json");
+    const json after = Load(*out_ / test / "correlation-after.json");
+    // Before: the air film read at the stud setting is ~3x too stiff at 5 um (thesis Table 8.1,
+    // scheme A 23 N/um against 2.8 N/um), so the agreement is far below 90 %.
+    EXPECT_LT(before["summary"]["mean_agreement_pct"].get<double>(), 90.0) << test;
+    // After: the acceptance figure.
+    EXPECT_GE(after["summary"]["mean_agreement_pct"].get<double>(), 98.0) << test;
+    // All five rigid-body modes of the carriage are paired with the updated model.
+    EXPECT_GE(after["pairs"].size(), 5u) << test;
+  }
+}
+
+TEST_F(GuidewayRun, LeavesTheSampleUnchanged) {
+  EXPECT_EQ(HashTree(kSample), *before_);
+}
+
+TEST_F(GuidewayRun, ReportRendersInHeadlessChromium) {
+  ASSERT_EQ(exit_code_, 0);
+  if (!test::ChromiumAvailable()) GTEST_SKIP() << "chromium not installed (scripts/install-deps.sh --test)";
+  const test::BrowserResult r = test::CheckInChromium(*out_ / "report.html", *out_ / "browser");
+  ASSERT_TRUE(r.ran);
+  EXPECT_EQ(r.page_errors, "");
+  EXPECT_EQ(r.console_errors, "");
+  // Per test: stabilisation, FRFs, 2 MAC matrices, mode shapes; then the ranking and the error fall.
+  EXPECT_EQ(r.expected, 2 * 5 + 2);
+  EXPECT_EQ(r.rendered, r.expected);
+  EXPECT_EQ(r.rendered_divs, r.expected);
+}
+
+TEST(RunProjectFile, BadInputNamesFileLineAndKey) {
+  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "project-bad";
+  fs::create_directories(dir);
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return dir / name;
+  };
+  write("model.toml", "[model]\nname = \"x\"\n");
+  const fs::path unknown = write("unknown.toml", "[project]\nmodel = \"model.toml\"\ncolour = 3\n");
+  try {
+    app::ReadProjectFile(unknown);
+    FAIL() << "unknown key accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown.toml:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("colour"), std::string::npos) << e.what();
+  }
+  const fs::path missing = write("missing.toml", "[project]\nmodel = \"model.toml\"\n[[test]]\ntime = [\"nope.unv\"]\n");
+  try {
+    app::ReadProjectFile(missing);
+    FAIL() << "missing data file accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("nope.unv"), std::string::npos) << e.what();
+  }
+  const fs::path no_tests = write("notests.toml", "[project]\nmodel = \"model.toml\"\n");
+  EXPECT_THROW(app::ReadProjectFile(no_tests), InputError);
+  // Through the CLI: exit 1 for bad input, 2 for bad usage, and nothing written.
+  EXPECT_EQ(RunEma("run '" + unknown.string() + "' -o '" + (dir / "out").string() + "'", dir / "log1.txt"), 1);
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  EXPECT_EQ(RunEma("run --no-such-option", dir / "log2.txt"), 2);
+}
+
+}  // namespace
+}  // namespace ema
