@@ -32,10 +32,12 @@ struct Dof {
 /// "+X", "-Z", "+RY", "S" (scalar) for a UFF direction code.
 inline std::string DirectionName(int code) {
   static const char* kAxis[] = {"X", "Y", "Z", "RX", "RY", "RZ"};
-  if (code == 0) return "S";
+  // Built by appending: GCC 12 warns falsely (-Wrestrict) on `"literal" + std::string` when inlined.
+  std::string name;
+  if (code == 0) return name.assign("S");
   const int a = code < 0 ? -code : code;
-  if (a > 6) return "?" + std::to_string(code);
-  return std::string(code < 0 ? "-" : "+") + kAxis[a - 1];
+  if (a > 6) return name.append("?").append(std::to_string(code));
+  return name.append(code < 0 ? "-" : "+").append(kAxis[a - 1]);
 }
 
 /// Parses "+X", "X", "-z", "+RY" (case-insensitive) into a UFF direction code; 0 if unknown.
@@ -53,7 +55,7 @@ inline int ParseDirection(std::string_view text) {
   return 0;
 }
 
-inline std::string DofName(const Dof& dof) { return std::to_string(dof.node) + DirectionName(dof.direction); }
+inline std::string DofName(const Dof& dof) { return std::to_string(dof.node).append(DirectionName(dof.direction)); }
 
 /// Physical quantity of a channel. Values are the UFF 58 "specific data type" codes.
 enum class Quantity : int {
