@@ -1,5 +1,6 @@
 #include "ema/curvefit/lsfd.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <cmath>
@@ -84,8 +85,18 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
         B(2 * (f * m + i), o) = h.real();
         B(2 * (f * m + i) + 1, o) = h.imag();
       }
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr(P);  // blocked; columns are scaled and independent
-  Eigen::MatrixXd X = qr.solve(B);
+  // Normal equations of the column-scaled design (unit-norm columns keep cond(P^T P) modest);
+  // QR when the Cholesky factor shows rank trouble.
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(n_unk, n_unk);
+  gram.selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
+  Eigen::LLT<Eigen::MatrixXd> llt(gram.selfadjointView<Eigen::Lower>());
+  const Eigen::VectorXd diag = llt.matrixL().toDenseMatrix().diagonal();
+  Eigen::MatrixXd X;
+  if (llt.info() == Eigen::Success && diag.minCoeff() > 1e-6 * diag.maxCoeff()) {
+    X = llt.solve(P.transpose() * B);
+  } else {
+    X = Eigen::HouseholderQR<Eigen::MatrixXd>(P).solve(B);
+  }
   const double err = (P * X - B).norm(), ref = B.norm();
   X = scale.asDiagonal() * X;
 
