@@ -39,6 +39,8 @@ int RunModel(const std::vector<std::string>& args) {
   solve_options.setup = setup;
   solve_options.max_modes = max_modes;
   const model::Solution sol = model::Solve(m, solve_options);
+  if (m.points.empty())
+    std::cerr << "ema model: warning: " << model_path << " has no [[point]]: mode shapes are written without DOFs\n";
 
   formats::WriteOptions write_options;
   write_options.binary = vm["binary"].as<bool>();

@@ -524,8 +524,11 @@ std::string EffectToToml(const model::Effect& e) {
     return q + "\"";
   };
   std::string s = "[[effect]]\nkind = " + quote(e.kind) + "\ntarget = " + quote(e.target) + "\n";
-  for (const auto& [k, v] : e.parameters) s += k + " = " + Num(v) + "\n";
+  const bool k_as_law = e.kind == "series_compliance" && !e.law && e.parameters.count("k");
+  for (const auto& [k, v] : e.parameters)
+    if (!(k_as_law && k == "k")) s += k + " = " + Num(v) + "\n";
   if (e.law) s += "law = " + LawToToml(*e.law) + "\n";
+  if (k_as_law) s += "law = " + LawToToml(model::LinearLaw{e.parameters.at("k")}) + "\n";
   return s;
 }
 

@@ -88,13 +88,15 @@ const std::vector<std::string>& EffectKinds() {
 Model ApplyEffect(const Model& input, const Effect& e) {
   Model model = input;
   if (e.kind == "series_compliance") {
-    if (!e.law) throw InputError(Where(model, e), "missing 'law' (e.g. law = { linear = { k = 6.5e6 } })");
+    std::optional<Law> law = e.law;
+    if (!law && e.parameters.count("k")) law = Law(LinearLaw{Param(model, e, "k", true)});
+    if (!law) throw InputError(Where(model, e), "missing 'law' (e.g. law = { linear = { k = 6.5e6 } })");
     for (Spring* s : GroupSprings(model, e)) {
       if (auto* chain = std::get_if<SeriesLaw>(&s->law.value)) {
-        chain->elements.push_back(*e.law);  // the chain re-solves its equilibrium with the new element
+        chain->elements.push_back(*law);  // the chain re-solves its equilibrium with the new element
       } else {
         SeriesLaw series;
-        series.elements = {s->law, *e.law};
+        series.elements = {s->law, *law};
         // A lone air film keeps its gap as the chain's setting; otherwise the chain keeps the
         // element's own operating point.
         if (const auto* film = std::get_if<AirFilmLaw>(&s->law.value)) series.setting = film->operating_gap;

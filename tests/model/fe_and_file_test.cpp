@@ -222,12 +222,14 @@ TEST(ModelFile, WriteWithEffectsKeepsFileAndRoundTrips) {
   const fs::path out = dir / "updated.toml";
   Effect series{"series_compliance", "bearings", {}, Law(LinearLaw{6.5e6}), 0};
   Effect scale{"mass_scale", "carriage", {{"factor", 1.0625}}, std::nullopt, 0};
-  formats::WriteModelWithEffects(in, out, {series, scale});
+  Effect fitted{"series_compliance", "bearings", {{"k", 3.25e7}}, std::nullopt, 0};
+  formats::WriteModelWithEffects(in, out, {series, scale, fitted});
   std::ifstream a(in), b(out);
   const std::string original((std::istreambuf_iterator<char>(a)), {}), updated((std::istreambuf_iterator<char>(b)), {});
   EXPECT_EQ(updated.substr(0, original.size()), original);
   const Model m = formats::ReadModelFile(out);
-  ASSERT_EQ(m.effects.size(), 2u);
+  ASSERT_EQ(m.effects.size(), 3u);
+  EXPECT_DOUBLE_EQ(std::get<LinearLaw>(m.effects[2].law->value).k, 3.25e7) << "k written as a linear law";
   EXPECT_EQ(m.effects[0].kind, "series_compliance");
   EXPECT_DOUBLE_EQ(std::get<LinearLaw>(m.effects[0].law->value).k, 6.5e6);
   EXPECT_DOUBLE_EQ(m.effects[1].parameters.at("factor"), 1.0625);

@@ -122,6 +122,13 @@ TEST(Effects, SeriesComplianceGivesSeriesStiffness) {
   EXPECT_EQ(Assemble(e).springs[1].stiffness, 1e6) << "other groups untouched";
 }
 
+TEST(Effects, SeriesComplianceAcceptsKParameterAsLinearLaw) {
+  const Model m = OneBody();
+  const Model by_law = ApplyEffect(m, Effect{"series_compliance", "bearings", {}, Law(LinearLaw{6e6}), 0});
+  const Model by_k = ApplyEffect(m, Effect{"series_compliance", "bearings", {{"k", 6e6}}, std::nullopt, 0});
+  EXPECT_DOUBLE_EQ(Assemble(by_k).springs[0].stiffness, Assemble(by_law).springs[0].stiffness);
+}
+
 TEST(Effects, OperatingPointMovesTheAirGap) {
   Model m = OneBody();
   AirFilmLaw film;

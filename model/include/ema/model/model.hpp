@@ -10,6 +10,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -68,6 +69,7 @@ struct Law {
 
   Law() = default;
   template <typename T>
+    requires(!std::is_same_v<std::decay_t<T>, Law>)
   Law(T law) : value(std::move(law)) {}  // NOLINT: implicit on purpose (Law l = LinearLaw{k})
 
   /// "linear", "table", "air_film", "hertz", "series".
@@ -152,7 +154,9 @@ struct Effect {
   std::string kind;
   std::string target;
   std::map<std::string, double> parameters;  ///< factor, value, mass, k (per kind)
-  std::optional<Law> law;                     ///< series_compliance
+  /// series_compliance: the law in series. Without a law, parameters["k"] means a linear law
+  /// (handy for fitting); WriteModelWithEffects then writes it as law = { linear = { k } }.
+  std::optional<Law> law;
   int line = 0;
 };
 
