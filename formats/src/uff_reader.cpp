@@ -264,7 +264,8 @@ InputFile::InputFile(const std::filesystem::path& path) : name_(path.string()) {
   std::error_code ec;
   size_ = std::filesystem::file_size(path, ec);
   if (ec) size_ = 0;
-  buffer_.resize(1 << 22);
+  // 4 MiB blocks for big files; small files get a buffer of their own size (cheap opens).
+  buffer_.resize(static_cast<size_t>(std::clamp<std::uint64_t>(size_ + 1, 4096, std::uint64_t{1} << 22)));
 }
 
 InputFile::~InputFile() {
