@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -56,26 +57,33 @@ int RunEma(const std::string& args, const fs::path& log) {
 class GuidewayRun : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    out_ = new fs::path(fs::path(EMA_TEST_TMP_DIR) / "guideway-run");
+    // ctest runs each test in its own process, maybe in parallel: one output folder per process.
+    const std::string tag = "guideway-run-" + std::to_string(getpid());
+    out_ = new fs::path(fs::path(EMA_TEST_TMP_DIR) / tag);
+    log_ = new fs::path(fs::path(EMA_TEST_TMP_DIR) / (tag + ".log"));
     fs::remove_all(*out_);
     before_ = new std::map<std::string, std::uint64_t>(HashTree(kSample));
-    exit_code_ = RunEma("run '" + (kSample / "project.toml").string() + "' -o '" + out_->string() + "'",
-                     fs::path(EMA_TEST_TMP_DIR) / "guideway-run.log");
+    exit_code_ = RunEma("run '" + (kSample / "project.toml").string() + "' -o '" + out_->string() + "'", *log_);
   }
   static void TearDownTestSuite() {
+    std::error_code ignored;
+    fs::remove_all(*out_, ignored);  // ~20 MB per run
     delete out_;
+    delete log_;
     delete before_;
   }
   static fs::path* out_;
+  static fs::path* log_;
   static std::map<std::string, std::uint64_t>* before_;
   static int exit_code_;
 };
 fs::path* GuidewayRun::out_ = nullptr;
+fs::path* GuidewayRun::log_ = nullptr;
 std::map<std::string, std::uint64_t>* GuidewayRun::before_ = nullptr;
 int GuidewayRun::exit_code_ = -1;
 
 TEST_F(GuidewayRun, CompletesAndKeepsEveryIntermediateFile) {
-  ASSERT_EQ(exit_code_, 0) << std::ifstream(fs::path(EMA_TEST_TMP_DIR) / "guideway-run.log").rdbuf();
+  ASSERT_EQ(exit_code_, 0) << std::ifstream(*log_).rdbuf();
   for (const char* test : {"stud-5um", "stud-9um"})
     for (const char* file : {"frf.unv", "frf.json", "modes.unv", "modes.json", "stabilisation.json", "model-before.json",
                              "correlation-before.json", "correlation-before.md", "model-after.json",
@@ -117,6 +125,17 @@ TEST_F(GuidewayRun, UpdatedModelAgreesWithBothSetups) {
     // All five rigid-body modes of the carriage are paired with the updated model.
     EXPECT_GE(after["pairs"].size(), 5u) << test;
   }
+}
+
+TEST_F(GuidewayRun, StepOutputsMatchTheSubcommand) {
+  ASSERT_EQ(exit_code_, 0);
+  // `ema run` calls the subcommands in-process: the same command typed by hand writes the same file.
+  const fs::path modes = *out_ / "stud-9um" / "modes.unv", again = *out_ / "correlation-again.json";
+  ASSERT_EQ(RunEma("correlate '" + modes.string() + "' '" + (kSample / "model.toml").string() +
+                       "' --setup stud-9um --json '" + again.string() + "'",
+                   *out_ / "correlate-again.log"),
+            0);
+  EXPECT_EQ(Load(again), Load(*out_ / "stud-9um" / "correlation-before.json"));
 }
 
 TEST_F(GuidewayRun, LeavesTheSampleUnchanged) {
