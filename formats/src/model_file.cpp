@@ -230,6 +230,10 @@ class Reader {
     const fs::path mass = Resolve(String(Require(t, "mass", "[fe]"), "mass"));
     const fs::path stiffness = Resolve(String(Require(t, "stiffness", "[fe]"), "stiffness"));
     const fs::path dofs = Resolve(String(Require(t, "dofs", "[fe]"), "dofs"));
+    for (const char* key : {"mass", "stiffness", "dofs"}) {
+      const fs::path f = Resolve(String(*t.get(key), key));
+      if (!fs::exists(f)) throw InputError(At(*t.get(key)), "[fe] " + std::string(key) + ": file '" + f.string() + "' not found");
+    }
     m->fe.mass = ReadMatrixMarket(mass);
     m->fe.stiffness = ReadMatrixMarket(stiffness);
     m->fe.origin = dofs.string();
