@@ -28,6 +28,7 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
       LsfdResult lsfd = EstimateModeShapes(data, result.selected, options.lsfd);
       result.modes = std::move(lsfd.modes);
       result.synthesis_error = lsfd.synthesis_error;
+      for (const auto& w : lsfd.warnings) result.warnings.push_back(source + ": " + w);
     } else {
       result.modes.dofs = data.outputs;
       result.warnings.push_back(source + ": no stable poles found; no modes selected");

@@ -4,6 +4,7 @@
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <cmath>
+#include <sstream>
 
 #include "ema/core/error.hpp"
 
@@ -137,6 +138,18 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
         c2 += w * lr[i] / phi[o];
         wsum += w;
       }
+      // A driving-point receptance residue is phi_d^2/(2j w_d m) with m > 0: negative imaginary.
+      // The opposite sign means an inverted sensor or hammer direction in the data; the shape
+      // then comes out rotated by 90 degrees.
+      for (auto [o, i] : driving)
+        if ((phi[o] * lr[i]).imag() > 0.0) {
+          std::ostringstream msg;
+          msg << "mode at " << pole.frequency_hz << " Hz: driving point " << DofName(data.outputs[o])
+              << " has a residue of the sign of a negative modal mass (inverted sensor or hammer sign?);"
+                 " unit-modal-mass shape is rotated by 90 degrees";
+          result.warnings.push_back(msg.str());
+          break;
+        }
       if (wsum > 0.0) {
         const cd c = std::sqrt(c2 / wsum);
         shape = phi * c * std::sqrt(cd(0.0, 2.0 * pole.lambda.imag()));

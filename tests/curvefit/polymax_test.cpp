@@ -195,6 +195,7 @@ TEST(Polymax, UnitModalMassForEveryFrfType) {
     options.polymax.order_max = 24;
     const FitResult fit = Fit(frfs, options);
     ASSERT_EQ(fit.modes.modes.size(), 3u) << "k = " << k_pow;
+    EXPECT_TRUE(fit.warnings.empty());
     for (int r = 0; r < 3; ++r) {
       const Mode& m = fit.modes.modes[r];
       EXPECT_TRUE(m.unit_modal_mass);
@@ -206,6 +207,20 @@ TEST(Polymax, UnitModalMassForEveryFrfType) {
       EXPECT_GT(m.mpc, 0.999);
     }
   }
+}
+
+TEST(Polymax, InvertedDrivingPointSignIsReported) {
+  // Every FRF negated (an inverted sensor): the driving-point residues imply a negative modal
+  // mass, which the fit must say instead of silently returning 90-degree-rotated shapes.
+  const Truth truth = MakeTruth({25.0, 60.0, 95.0}, {0.01, 0.012, 0.008}, 6);
+  FrfSet frfs = MakeFrfSet(truth, {0, 3}, 120.0, 0.05, 0.002, 4);
+  for (auto& h : frfs.h) h = -h;
+  FitOptions options;
+  options.polymax.order_max = 24;
+  const FitResult fit = Fit(frfs, options);
+  ASSERT_EQ(fit.modes.modes.size(), 3u);
+  ASSERT_EQ(fit.warnings.size(), 3u);
+  EXPECT_NE(fit.warnings[0].find("negative modal mass"), std::string::npos) << fit.warnings[0];
 }
 
 TEST(Polymax, ExponentialWindowDampingRemoved) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "ema/core/types.hpp"
@@ -20,6 +21,7 @@ struct LsfdResult {
   ModeSet modes;                     ///< one mode per pole, shapes at FitData::outputs
   Eigen::MatrixXcd residues;         ///< (l·m) × N receptance residues phi_or·l_ir (column per mode)
   double synthesis_error = 0.0;      ///< ||H - H_fit|| / ||H|| over the band (weighted as fitted)
+  std::vector<std::string> warnings; ///< e.g. driving-point residues of the wrong sign
 };
 
 /// Fits the shapes phi_r of H_o = sum_r phi_or l_r^T/(jw - lambda_r) + c.c. + residuals, with the
