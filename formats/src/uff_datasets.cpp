@@ -571,6 +571,57 @@ bool Reader::Impl::Next(Dataset* ds) {
   return true;
 }
 
+/// Fast path for one fixed-width field in the canonical Fortran forms ("  1.23450E-02",
+/// "-3.09944E-004", "0.12345-100", D exponents). Returns 1 with *out set, 0 for a blank field,
+/// -1 when the general parser must decide (NaN, many digits, odd forms).
+static inline int FastField(const char* p, const char* e, double* out) {
+  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                                      1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  while (p < e && *p == ' ') ++p;
+  if (p == e) return 0;
+  bool negative = false;
+  if (*p == '-' || *p == '+') {
+    negative = *p == '-';
+    ++p;
+  }
+  std::uint64_t m = 0;
+  const char* s = p;
+  while (p < e && static_cast<unsigned>(*p - '0') < 10u) m = m * 10 + static_cast<unsigned>(*p++ - '0');
+  int digits = static_cast<int>(p - s);
+  int exp10 = 0;
+  if (p < e && *p == '.') {
+    ++p;
+    const char* f = p;
+    while (p < e && static_cast<unsigned>(*p - '0') < 10u) m = m * 10 + static_cast<unsigned>(*p++ - '0');
+    exp10 = -static_cast<int>(p - f);
+    digits += static_cast<int>(p - f);
+  }
+  if (digits == 0 || digits > 18) return -1;
+  int ex = 0;
+  if (p < e && *p != ' ') {
+    const char c = *p;
+    if (c == 'E' || c == 'e' || c == 'D' || c == 'd') ++p;
+    else if (c != '+' && c != '-') return -1;
+    bool en = false;
+    if (p < e && (*p == '+' || *p == '-')) {
+      en = *p == '-';
+      ++p;
+    }
+    const char* xs = p;
+    while (p < e && static_cast<unsigned>(*p - '0') < 10u) ex = ex * 10 + (*p++ - '0');
+    if (p == xs || p - xs > 3) return -1;
+    if (en) ex = -ex;
+  }
+  while (p < e && *p == ' ') ++p;
+  if (p != e) return -1;
+  const int t = exp10 + ex;
+  if (m >= (std::uint64_t{1} << 53) || t < -22 || t > 22) return -1;
+  double v = static_cast<double>(m);
+  v = t < 0 ? v / kPow10[-t] : v * kPow10[t];  // exact operands: correctly rounded
+  *out = negative ? -v : v;
+  return 1;
+}
+
 size_t Reader::Impl::ParseValueLine(std::string_view line, const ValueLayout& layout, const Where& where,
                                     std::vector<double>* out, size_t want, std::int64_t declared) {
   // Fixed columns first (fast path); whitespace/sign tokens when a slice does not parse
@@ -584,18 +635,16 @@ size_t Reader::Impl::ParseValueLine(std::string_view line, const ValueLayout& la
   const size_t n = line.size();
   while (out->size() - before < want && field < layout.per_line && pos < n) {
     const size_t len = std::min(static_cast<size_t>(layout.widths[field]), n - pos);
-    const std::string_view s(d + pos, len);
-    bool blank = true;
-    for (char ch : s)
-      if (ch != ' ' && ch != '\t') {
-        blank = false;
+    double v;
+    const int r = FastField(d + pos, d + pos + len, &v);
+    if (r == 0) break;  // a blank slice at the end of a short last line is not a value
+    if (r < 0) {
+      const std::string_view s(d + pos, len);
+      if (Trim(s).empty()) break;
+      if (!ParseReal(s, &v)) {
+        ok = false;
         break;
       }
-    if (blank) break;  // a blank slice at the end of a short last line is not a value
-    double v;
-    if (!ParseReal(s, &v)) {
-      ok = false;
-      break;
     }
     out->push_back(v);
     pos += len;
