@@ -62,8 +62,8 @@ nlohmann::json ModesJson(const ModeSet& set, const curvefit::FitResult& fit) {
 nlohmann::json StabilisationJson(const curvefit::FitResult& fit, const curvefit::StabilityOptions& stab) {
   const auto& d = fit.diagram;
   nlohmann::json orders = nlohmann::json::array();
-  for (const auto& order : d.orders) {
-    if (order.empty()) continue;
+  for (size_t k = 0; k < d.orders.size(); ++k) {
+    const auto& order = d.orders[k];
     nlohmann::json poles = nlohmann::json::array();
     for (const auto& p : order) {
       nlohmann::json part = nlohmann::json::array();
@@ -75,7 +75,7 @@ nlohmann::json StabilisationJson(const curvefit::FitResult& fit, const curvefit:
                        {"physical", p.physical},
                        {"participation", part}});
     }
-    orders.push_back({{"order", order.front().order}, {"poles", poles}});
+    orders.push_back({{"order", d.order_min + static_cast<int>(k)}, {"poles", poles}});
   }
   nlohmann::json selected = nlohmann::json::array();
   for (const auto& s : fit.selected)
