@@ -328,6 +328,20 @@ std::string FormatNumber(double v, int significant = 3) {
 
 std::string EffectLabel(const model::Effect& e) { return e.kind + " of '" + e.target + "'"; }
 
+// "series_compliance (hertz) of 'bearings'", "mass_scale of 'carriage'", pairs joined by " + ".
+std::string CandidateLabel(const Candidate& c) {
+  if (c.effects.empty()) return c.kind;
+  std::vector<std::string> parts;
+  for (const model::Effect& e : c.effects) {
+    std::string label = e.kind;
+    if (e.kind == "series_compliance" && e.law) label += " (" + e.law->KindName() + ")";
+    parts.push_back(label + " of '" + e.target + "'");
+  }
+  std::string out;
+  for (size_t i = 0; i < parts.size(); ++i) out += (i ? " + " : "") + parts[i];
+  return out;
+}
+
 std::string Join(const std::vector<std::string>& parts, const std::string& sep) {
   std::string out;
   for (size_t i = 0; i < parts.size(); ++i) out += (i ? sep : "") + parts[i];
@@ -672,7 +686,7 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
       if (na <= 0.0 || nb <= 0.0) continue;
       const double cosine = da.dot(db) / (na * nb);
       if (std::abs(cosine) > 0.95 && std::abs(all[a].score - all[b].score) < 2.0)
-        all[a].tied_with.push_back(all[b].kind + " of '" + all[b].target + "'");
+        all[a].tied_with.push_back(CandidateLabel(all[b]));
     }
   }
 
@@ -697,15 +711,16 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
           << FormatNumber(first.explained_pct, 3) << " % of the residual explained)";
     for (size_t i = 1; i < all.size(); ++i) {
       const Candidate& c = all[i];
-      if (c.kind == "none" || !c.error.empty()) continue;
-      words << "; the next best, " << c.kind << " of '" << c.target << "', leaves "
+      // The next best *other* explanation: not a variant (another law, a pair) of the same one.
+      if (c.kind == "none" || !c.error.empty() || (c.kind == first.kind && c.target == first.target)) continue;
+      words << "; the next best, " << CandidateLabel(c) << ", leaves "
             << pct(c.mean_abs_frequency_error_pct);
       break;
     }
     words << ".";
     if (!first.tied_with.empty())
       words << " The data cannot tell it apart from " << Join(first.tied_with, ", ")
-            << ": more modes, shapes or a second setup would.";
+            << ": more modes, shapes or another setup would.";
   }
   result.explanation = words.str();
   result.candidates = std::move(all);
