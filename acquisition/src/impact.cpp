@@ -63,26 +63,44 @@ double AutocorrelationSecondaryPeak(const std::vector<double>& x, int begin, int
   return best;
 }
 
-std::string ClippingReason(const std::vector<double>& x, double full_scale, double overload_fraction, int flat_top_run) {
-  double peak = 0.0;
-  for (double v : x) peak = std::max(peak, std::abs(v));
-  if (peak <= 0.0) return "";
-  if (std::isfinite(full_scale) && full_scale > 0.0 && peak > overload_fraction * full_scale)
-    return Format("overload: peak %.6g exceeds %.0f %% of the full scale %.6g", peak, 100.0 * overload_fraction, full_scale);
-  // Flat top: a run of consecutive samples at the extreme value (same sign), as a saturated ADC gives.
-  const double tol = 1e-9 * peak;
+namespace {
+
+// Running peak of |x| and the run of same-signed samples at it (restarted whenever a larger value
+// appears, so at the end `longest` is the longest run at the final peak).
+struct FlatTopTracker {
+  double peak = 0.0, prev = 0.0;
   int run = 0, longest = 0;
-  double prev_sign = 0.0;
-  for (double v : x) {
-    const bool at_peak = std::abs(v) >= peak - tol;
-    const double sign = v >= 0 ? 1.0 : -1.0;
-    run = at_peak ? (run > 0 && sign == prev_sign ? run + 1 : 1) : 0;
-    prev_sign = sign;
+  void Add(double v) {
+    const double a = std::abs(v);
+    if (a > peak * (1.0 + 1e-9)) {
+      peak = a;
+      longest = 0;
+      run = 1;
+    } else if (peak > 0.0 && a >= peak * (1.0 - 1e-9)) {
+      run = (run > 0 && (v >= 0) == (prev >= 0)) ? run + 1 : 1;
+    } else {
+      run = 0;
+    }
     longest = std::max(longest, run);
+    prev = v;
   }
-  if (longest >= flat_top_run)
-    return Format("clipped: flat top of %.0f consecutive samples at the extreme value %.6g", longest, peak);
-  return "";
+  std::string Reason(double full_scale, double overload_fraction, int flat_top_run) const {
+    if (peak <= 0.0) return "";
+    if (std::isfinite(full_scale) && full_scale > 0.0 && peak > overload_fraction * full_scale)
+      return Format("overload: peak %.6g exceeds %.0f %% of the full scale %.6g", peak, 100.0 * overload_fraction,
+                    full_scale);
+    if (longest >= flat_top_run)
+      return Format("clipped: flat top of %.0f consecutive samples at the extreme value %.6g", longest, peak);
+    return "";
+  }
+};
+
+}  // namespace
+
+std::string ClippingReason(const std::vector<double>& x, double full_scale, double overload_fraction, int flat_top_run) {
+  FlatTopTracker t;
+  for (double v : x) t.Add(v);
+  return t.Reason(full_scale, overload_fraction, flat_top_run);
 }
 
 ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& opt) {
@@ -161,9 +179,25 @@ ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& opt) {
       const TimeRecord& r = test.records[idx];
       const std::vector<double>& x = r.samples;
       const double dc = Mean(x, 0, pre_end);
-      double rpeak = 0.0;
-      for (double v : x) rpeak = std::max(rpeak, std::abs(v - dc));
-      std::string why = ClippingReason(x, r.full_scale, opt.overload_fraction, opt.flat_top_run);
+      // One pass: clipping (raw samples), the peak after DC removal and the energy of each block
+      // of 5 % of the record after the trigger (block rms is not fooled by the few-sample
+      // acceleration spike at the impact, which would make a ringing mode look small).
+      FlatTopTracker clip;
+      double rpeak = 0.0, ref_ss = 0.0, block_ss = 0.0;
+      int in_block = 0;
+      for (int i = 0; i < n; ++i) {
+        clip.Add(x[i]);
+        const double v = x[i] - dc;
+        rpeak = std::max(rpeak, std::abs(v));
+        if (i < trig) continue;
+        block_ss += v * v;
+        if (++in_block == tail) {
+          ref_ss = std::max(ref_ss, block_ss);
+          block_ss = 0.0;
+          in_block = 0;
+        }
+      }
+      std::string why = clip.Reason(r.full_scale, opt.overload_fraction, opt.flat_top_run);
       if (!why.empty()) why = "response " + DofName(r.channel) + " " + why;
       const double pre_rms = Rms(x, 0, pre_end, dc);
       if (why.empty() && pre_end >= 8 && rpeak > 0.0 && pre_rms > opt.pretrigger_motion * rpeak)
@@ -171,12 +205,9 @@ ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& opt) {
               Format(" was moving before the impact: pre-trigger rms %.1f %% of its peak (limit %.1f %%)",
                      100.0 * pre_rms / rpeak, 100.0 * opt.pretrigger_motion);
       if (why.empty() && rpeak <= 0.0) why = "response " + DofName(r.channel) + " is identically zero";
-      // Envelope at the end relative to the strongest part of the decay, both as rms over blocks of
-      // 5 % of the record (a block rms is not fooled by the few-sample acceleration spike at the
-      // impact, which would make a ringing mode look small against the peak); noise rms removed.
+      // End envelope relative to the strongest block, noise (pre-trigger) rms removed from both.
       const double noise = pre_end >= 8 ? pre_rms : 0.0;
-      double ref_rms = 0.0;
-      for (int b = trig; b + tail <= n; b += tail) ref_rms = std::max(ref_rms, Rms(x, b, b + tail, dc));
+      const double ref_rms = std::sqrt(ref_ss / tail);
       const double end_rms = Rms(x, n - tail, n, dc);
       const double end_amp = std::sqrt(std::max(0.0, end_rms * end_rms - noise * noise));
       const double ref_amp = std::sqrt(std::max(0.0, ref_rms * ref_rms - noise * noise));

@@ -34,11 +34,19 @@ void CrossSpectra::Resize(Eigen::Index lines) {
 }
 
 void CrossSpectra::Add(const cd* x, const cd* y) {
+  // Plain real arithmetic: std::complex products go through the C99 Annex G NaN checks.
   const Eigen::Index n = gxx.size();
+  const double* xp = reinterpret_cast<const double*>(x);
+  const double* yp = reinterpret_cast<const double*>(y);
+  double* gxy_p = reinterpret_cast<double*>(gxy.data());
+  double* gxx_p = gxx.data();
+  double* gyy_p = gyy.data();
   for (Eigen::Index k = 0; k < n; ++k) {
-    gxx[k] += std::norm(x[k]);
-    gyy[k] += std::norm(y[k]);
-    gxy[k] += std::conj(x[k]) * y[k];
+    const double xr = xp[2 * k], xi = xp[2 * k + 1], yr = yp[2 * k], yi = yp[2 * k + 1];
+    gxx_p[k] += xr * xr + xi * xi;
+    gyy_p[k] += yr * yr + yi * yi;
+    gxy_p[2 * k] += xr * yr + xi * yi;      // Re conj(x) y
+    gxy_p[2 * k + 1] += xr * yi - xi * yr;  // Im conj(x) y
   }
   ++averages;
 }
