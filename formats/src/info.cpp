@@ -123,7 +123,8 @@ FileSummary SummarizeFile(const std::filesystem::path& path) {
   while (reader.Next(&d)) {
     ++s.datasets[d.number];
     for (const auto& n : d.notes) AddNote(&notes, n);
-    if (const auto* f = std::get_if<uff::Function58>(&d.body)) {
+    if (auto* f = std::get_if<uff::Function58>(&d.body)) {
+      uff::ApplyEntityNameDofs(f);
       ++s.records;
       if (f->binary) ++s.binary58;
       ++s.function_types[f->function_type];

@@ -124,8 +124,9 @@ std::vector<TimeRecord> ReadTimeRecords(const std::filesystem::path& path) {
   while (reader.Next(&d)) {
     if (d.number != 58) continue;
     ++index;
-    const auto& f = std::get<Function58>(d.body);
+    auto& f = std::get<Function58>(d.body);
     if (f.function_type != 1) continue;
+    uff::ApplyEntityNameDofs(&f);
     const std::string where = path.string() + ":" + std::to_string(d.line);
     if (f.IsComplex()) throw InputError(where, "dataset 58 record 7 field 1: a time record must be real (type 2 or 4)");
     if (f.count < 2) throw InputError(where, "dataset 58 record 7 field 2: a time record needs at least 2 samples");
@@ -239,6 +240,7 @@ FrfSet ReadFrfSet(const std::filesystem::path& path) {
   while (reader.Next(&d)) {
     if (d.number != 58) continue;
     auto& f = std::get<Function58>(d.body);
+    uff::ApplyEntityNameDofs(&f);
     if (f.function_type == 4) frfs.push_back({std::move(f), d.line});
     else if (f.function_type == 6) cohs.push_back({std::move(f), d.line});
   }

@@ -166,6 +166,28 @@ TEST(UffQuirks, FortranNumberForms) {
   EXPECT_FALSE(ParseInteger("6 6", &i));
 }
 
+TEST(UffQuirks, DofInEntityName) {
+  std::int64_t node = 0;
+  int dir = 0;
+  EXPECT_TRUE(DecodeEntityName(".1.Z-", &node, &dir));
+  EXPECT_EQ(node, 1);
+  EXPECT_EQ(dir, -3);
+  EXPECT_TRUE(DecodeEntityName(".56.Z", &node, &dir));
+  EXPECT_EQ(node, 56);
+  EXPECT_EQ(dir, 3);
+  EXPECT_TRUE(DecodeEntityName("1+Z", &node, &dir));
+  EXPECT_EQ(dir, 3);
+  EXPECT_TRUE(DecodeEntityName("101:-rx", &node, &dir));
+  EXPECT_EQ(node, 101);
+  EXPECT_EQ(dir, -4);
+  for (const char* no : {"NONE", "Mic 01", "", ".1.Q", "Root", "12"}) EXPECT_FALSE(DecodeEntityName(no, &node, &dir)) << no;
+  // dataset58_FRF.unv writes node 0, direction 0 and the names ".1.Z-" / ".56.Z" (sed -n 8p).
+  const FrfSet s = ema::formats::ReadFrfSet(fs::path(EMA_SHARED_DATA_DIR) / "uff/ufffiles-jl/dataset58_FRF.unv");
+  ASSERT_EQ(s.OutputCount(), 1);
+  EXPECT_EQ(s.outputs[0], (Dof{1, -3}));
+  EXPECT_EQ(s.references[0], (Dof{56, 3}));
+}
+
 TEST(UffQuirks, WriterWidths) {
   EXPECT_EQ(FormatE(0.012345, 13, 5), "  1.23450E-02");
   EXPECT_EQ(FormatE(-1.0, 20, 12), " -1.000000000000E+00");

@@ -218,6 +218,14 @@ bool ParseInteger(std::string_view text, std::int64_t* value);
 /// Formats `value` like Fortran 1PEw.d (C "%w.dE"), locale independent; 'D' exponent if asked.
 std::string FormatE(double value, int width, int precision, char exponent_letter = 'E');
 
+/// Decodes a DOF hidden in an entity name, as written by tools that leave node and direction
+/// 0 in record 6 (spec §12.2): ".1.Z-", ".56.Z", "1+Z", "101:-X". False if it is not one.
+bool DecodeEntityName(std::string_view name, std::int64_t* node, int* direction);
+
+/// For a 58 whose response (or reference) node and direction are both 0, takes them from the
+/// entity name when DecodeEntityName understands it. Returns true if anything changed.
+bool ApplyEntityNameDofs(Function58* f);
+
 /// Dataset number of a body alternative (151, 164, ...; RawDataset gives 0).
 int DatasetNumberOf(const DatasetBody& body);
 
