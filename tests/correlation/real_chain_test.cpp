@@ -85,7 +85,8 @@ std::string ModelToml(const std::string& lateral_group = "bearings") {
   for (double x : {-0.1, 0.1})
     for (double y : {-0.08, 0.08}) {
       const std::string at = Vec(x, y, -0.1);
-      m << "[[spring]]\nname = \"MZ" << ++n << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = " << at
+      ++n;
+      m << "[[spring]]\nname = \"MZ" << n << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = " << at
         << " }\nb = { body = \"ground\" }\ndirection = [0, 0, 1]\nlaw = { linear = { k = 8.0e6 } }\n\n"
         << "[[spring]]\nname = \"MX" << n << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = " << at
         << " }\nb = { body = \"ground\" }\ndirection = [1, 0, 0]\nlaw = { linear = { k = " << (x > 0 ? 3.0e6 : 2.0e6)
