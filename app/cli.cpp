@@ -2,8 +2,6 @@
 
 #include <unistd.h>
 
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -35,32 +33,8 @@ int NotBuiltYet(const std::string& command, const std::string& issue) {
 
 bool StderrIsTerminal() { return isatty(fileno(stderr)) != 0; }
 
-namespace {
-struct Scope {
-  bool active = false;
-  double begin = 0.0, end = 1.0;
-  std::string prefix;
-};
-Scope& CurrentScope() {
-  static Scope scope;
-  return scope;
-}
-}  // namespace
-
-ProgressScope::ProgressScope(double begin, double end, std::string prefix) {
-  CurrentScope() = Scope{true, begin, end, std::move(prefix)};
-}
-
-ProgressScope::~ProgressScope() { CurrentScope() = Scope{}; }
-
-void DrawProgress(double fraction, const std::string& stage_in) {
+void DrawProgress(double fraction, const std::string& stage) {
   if (!StderrIsTerminal()) return;
-  std::string stage = stage_in;
-  if (const Scope& scope = CurrentScope(); scope.active) {
-    fraction = scope.begin + (scope.end - scope.begin) * std::clamp(fraction, 0.0, 1.0);
-    stage = scope.prefix + (stage.empty() ? std::string() : ": " + stage);
-    if (fraction >= 1.0) fraction = std::nextafter(1.0, 0.0);  // the newline belongs to the whole run
-  }
   constexpr int kWidth = 30;
   const int filled = static_cast<int>(fraction * kWidth + 0.5);
   std::string bar(filled, '#');

@@ -31,16 +31,6 @@ bool StderrIsTerminal();
 /// Draws/updates a one-line progress bar on stderr when it is a terminal; no-op otherwise.
 void DrawProgress(double fraction, const std::string& stage);
 
-/// While alive, DrawProgress maps its 0..1 into [begin, end] of one overall bar and prefixes the
-/// stage name, so a subcommand run inside `ema run` draws its part of the whole run's bar.
-class ProgressScope {
- public:
-  ProgressScope(double begin, double end, std::string prefix);
-  ~ProgressScope();
-  ProgressScope(const ProgressScope&) = delete;
-  ProgressScope& operator=(const ProgressScope&) = delete;
-};
-
 }  // namespace ema::cli
 
 namespace ema {

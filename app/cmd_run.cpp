@@ -39,7 +39,6 @@ class StepRunner {
   bool Run(const std::string& label, const std::string& log_name,
            int (*command)(const std::vector<std::string>&), const std::vector<std::string>& args) {
     cli::DrawProgress(static_cast<double>(done_) / total_, label);
-    const cli::ProgressScope scope(static_cast<double>(done_) / total_, static_cast<double>(done_ + 1) / total_, label);
     std::ostringstream captured;
     int code = 1;
     std::string failure;
