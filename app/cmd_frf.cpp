@@ -90,6 +90,7 @@ int RunFrf(const std::vector<std::string>& args) {
       ("overload-fraction", po::value(&imp.overload_fraction), "overload: peak above this fraction of full scale (default 0.95)")
       ("level-tolerance", po::value(&imp.level_tolerance),
        "reject impacts whose peak force is off the point's median by more than this fraction (default 0.5)")
+      ("threads", po::value(&opt.threads), "threads for the transforms (default: all cores; results do not depend on it)")
       ("binary", po::bool_switch(&binary), "write 58b (binary) records");
   cli::AddHelp(&options);
   po::positional_options_description positional;

@@ -1,6 +1,8 @@
 #include "ema/frf/hammer_frf.hpp"
 
 #include <algorithm>
+#include <memory>
+#include <thread>
 #include <cstdio>
 #include <map>
 #include <stdexcept>
@@ -36,7 +38,6 @@ FrfResult EstimateFrfs(const HammerTest& test, const FrfOptions& options, const 
   std::vector<std::vector<RejectedImpact>> rejected;
   RealFft force_fft(n), response_fft(n);
   const int lines = force_fft.lines();
-  std::vector<std::complex<double>> x(lines);
 
   FrfResult result;
   FrfSummary& summary = result.summary;
@@ -47,12 +48,18 @@ FrfResult EstimateFrfs(const HammerTest& test, const FrfOptions& options, const 
   summary.notes = test.notes;
   summary.notes.insert(summary.notes.end(), processed.notes.begin(), processed.notes.end());
 
+  // Pass 1 (sequential, cheap): buckets, rejections, and the work list of each bucket.
+  struct Work {
+    int impact, slot;
+  };
+  std::vector<std::vector<Work>> work;
+  std::vector<int> force_slot(test.impacts.size(), -1);  // index into force spectra, -1 = not needed
+  int n_forces = 0;
   for (size_t k = 0; k < test.impacts.size(); ++k) {
     const Impact& imp = test.impacts[k];
     const ImpactAnalysis& a = processed.impacts[k];
     const int r = ref_index(imp.reference);
     if (!a.accepted) ++summary.rejected_impacts;
-    bool force_done = false;
     for (size_t slot = 0; slot < imp.responses.size(); ++slot) {
       const TimeRecord& rec = test.records[imp.responses[slot]];
       const int o = out_index(rec.channel);
@@ -64,6 +71,7 @@ FrfResult EstimateFrfs(const HammerTest& test, const FrfOptions& options, const 
         spectra.emplace_back();
         spectra.back().Resize(lines);
         rejected.emplace_back();
+        work.emplace_back();
       }
       const int b = it->second;
       const std::string& why = !a.accepted ? a.reason : a.response_rejections[slot];
@@ -71,17 +79,43 @@ FrfResult EstimateFrfs(const HammerTest& test, const FrfOptions& options, const 
         rejected[b].push_back({imp.number, test.set_names[imp.set], why});
         continue;
       }
-      if (!force_done) {
-        acquisition::WindowForce(test.records[imp.force], a, processed.decay_rate, force_fft.input());
-        const std::complex<double>* fx = force_fft.Execute();
-        std::copy(fx, fx + lines, x.begin());
-        force_done = true;
-      }
-      acquisition::WindowResponse(rec, a, static_cast<int>(slot), processed.decay_rate, response_fft.input());
-      spectra[b].Add(x.data(), response_fft.Execute());
+      if (force_slot[k] < 0) force_slot[k] = n_forces++;
+      work[b].push_back({static_cast<int>(k), static_cast<int>(slot)});
     }
-    ReportProgress(progress, static_cast<double>(k + 1) / test.impacts.size(), "FRF");
   }
+  // Force spectra once per used impact.
+  std::vector<std::complex<double>> forces(static_cast<size_t>(n_forces) * lines);
+  for (size_t k = 0; k < test.impacts.size(); ++k) {
+    if (force_slot[k] < 0) continue;
+    acquisition::WindowForce(test.records[test.impacts[k].force], processed.impacts[k], processed.decay_rate,
+                             force_fft.input());
+    const std::complex<double>* fx = force_fft.Execute();
+    std::copy(fx, fx + lines, forces.begin() + static_cast<std::ptrdiff_t>(force_slot[k]) * lines);
+  }
+  // Pass 2: response transforms and accumulation. Each bucket belongs to one thread and is summed
+  // in impact order, so the result does not depend on the thread count.
+  const int hw = static_cast<int>(std::thread::hardware_concurrency());
+  const int threads = std::max(1, std::min<int>(options.threads > 0 ? options.threads : std::max(1, hw),
+                                                static_cast<int>(keys.size())));
+  auto worker = [&](int t, RealFft* fft) {
+    for (size_t b = t; b < keys.size(); b += threads) {
+      for (const Work& w : work[b]) {
+        const Impact& imp = test.impacts[w.impact];
+        acquisition::WindowResponse(test.records[imp.responses[w.slot]], processed.impacts[w.impact], w.slot,
+                                    processed.decay_rate, fft->input());
+        spectra[b].Add(forces.data() + static_cast<std::ptrdiff_t>(force_slot[w.impact]) * lines, fft->Execute());
+      }
+    }
+  };
+  {
+    std::vector<std::unique_ptr<RealFft>> ffts;
+    for (int t = 1; t < threads; ++t) ffts.push_back(std::make_unique<RealFft>(n));
+    std::vector<std::thread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(worker, t, ffts[t - 1].get());
+    worker(0, &response_fft);
+    for (std::thread& th : pool) th.join();
+  }
+  ReportProgress(progress, 1.0, "FRF");
 
   // Every FRF needs at least one accepted impact.
   for (size_t b = 0; b < keys.size(); ++b)

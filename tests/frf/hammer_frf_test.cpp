@@ -433,6 +433,21 @@ TEST(HammerFrf, ImpactsGroupedByRecordOrderWhenLoadCasesDoNotNumberThem) {
   EXPECT_EQ((by_order.frfs.h[0] - conventional.frfs.h[0]).norm(), 0.0);
 }
 
+TEST(HammerFrf, ThreadCountDoesNotChangeTheResult) {
+  // Each FRF is accumulated by one thread in impact order: bit-identical for 1 and 3 threads.
+  const auto sys = testing::MakeThreeDof();
+  HammerTestPlan plan = testing::ThreeDofPlan();
+  plan.samples_per_record = 2048;
+  plan.response_noise = 0.01;
+  const auto test = acquisition::AssembleHammerTest(testing::ToRecordSets(acquisition::SimulateHammerTestSets({sys.truth}, plan)));
+  FrfOptions one, three;
+  one.threads = 1;
+  three.threads = 3;
+  const FrfResult a = EstimateFrfs(test, one), b = EstimateFrfs(test, three);
+  EXPECT_EQ((a.frfs.h[0] - b.frfs.h[0]).norm(), 0.0);
+  EXPECT_EQ((a.frfs.coherence[0] - b.frfs.coherence[0]).norm(), 0.0);
+}
+
 TEST(HammerFrf, PlansAreCreatedOnceAndReused) {
   const auto sys = testing::MakeThreeDof();
   HammerTestPlan plan = testing::ThreeDofPlan();

@@ -20,6 +20,7 @@ struct FrfOptions {
   double band_lo_hz = 0.0;                     ///< keep lines in [band_lo_hz, band_hi_hz]
   double band_hi_hz = std::numeric_limits<double>::infinity();
   Quantity output_quantity = Quantity::kUnknown;  ///< kUnknown: as measured (the first response's quantity)
+  int threads = 0;  ///< FFT/accumulation threads; 0 = all cores. Results do not depend on it.
 };
 
 struct RejectedImpact {
