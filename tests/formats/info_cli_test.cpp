@@ -62,6 +62,23 @@ TEST(FormatsInfo, SummaryOfGeometryFile) {
   EXPECT_EQ(s.units, std::vector<std::string>{"USER_DEFINED (code 9)"});
 }
 
+TEST(FormatsInfo, SummaryOfCsvTimeData) {
+  const fs::path p = fs::path(EMA_TEST_TMP_DIR) / "info_impacts.csv";
+  {
+    std::ofstream out(p, std::ios::binary);
+    out << "impact,time,force:3:+Z,acc:101:-X\n1,0,1,2\n1,0.5,3,4\n1,1,5,6\n2,0,1,2\n2,0.5,3,4\n";
+  }
+  const FileSummary s = SummarizeFile(p);
+  EXPECT_EQ(s.format, "csv");
+  EXPECT_EQ(s.records, 4);  // 2 channels x 2 impacts
+  EXPECT_EQ(s.function_types, (std::map<int, int>{{1, 4}}));
+  EXPECT_EQ(s.reference_dofs, (std::set<std::pair<std::int64_t, int>>{{3, 3}}));
+  EXPECT_EQ(s.response_dofs, (std::set<std::pair<std::int64_t, int>>{{3, 3}, {101, -1}}));
+  EXPECT_DOUBLE_EQ(s.abscissa.at(1).max, 1.0);
+  EXPECT_EQ(s.abscissa.at(1).points_min, 2);
+  EXPECT_EQ(s.abscissa.at(1).points_max, 3);
+}
+
 TEST(FormatsInfo, CliHelpAndExitCodes) {
   if (!HaveEma()) GTEST_SKIP() << "ema executable not built: " << EMA_EXECUTABLE;
   CliRun r = Ema("info --help");
