@@ -140,9 +140,13 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
       }
       // A driving-point receptance residue is phi_d^2/(2j w_d m) with m > 0: negative imaginary.
       // The opposite sign means an inverted sensor or hammer direction in the data; the shape
-      // then comes out rotated by 90 degrees.
+      // then comes out rotated by 90 degrees. Only driving points where the mode really shows
+      // (residue >= 10 % of the largest driving-point residue) count: at a node of the mode the
+      // residue is noise and its sign means nothing.
+      double largest_driving = 0.0;
+      for (auto [o, i] : driving) largest_driving = std::max(largest_driving, std::abs(phi[o] * lr[i]));
       for (auto [o, i] : driving)
-        if ((phi[o] * lr[i]).imag() > 0.0) {
+        if ((phi[o] * lr[i]).imag() > 0.0 && std::abs(phi[o] * lr[i]) >= 0.1 * largest_driving) {
           std::ostringstream msg;
           msg << "mode at " << pole.frequency_hz << " Hz: driving point " << DofName(data.outputs[o])
               << " has a residue of the sign of a negative modal mass (inverted sensor or hammer sign?);"
