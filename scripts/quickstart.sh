@@ -7,7 +7,12 @@ cd "$(dirname "$0")/.."
 mode="${1:-}"
 bash scripts/install-deps.sh ${mode}
 jobs=$(nproc 2>/dev/null || echo 2)
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+extra=()
+# The test run also builds the UFF reader's libFuzzer target and runs it briefly (needs clang).
+if [[ "${mode}" == "--test" ]] && command -v clang++ >/dev/null 2>&1; then
+  extra+=(-DEMA_BUILD_FUZZ=ON)
+fi
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${extra[@]}" >/dev/null
 cmake --build build -j"${jobs}"
 if [[ "${mode}" == "--test" ]]; then
   ctest --test-dir build --output-on-failure -j"${jobs}" --timeout 900
