@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <thread>
 
 namespace ema::acquisition {
 
@@ -108,7 +109,9 @@ ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& opt) {
   const double dt = test.sample_interval_s;
   const int n = test.samples;
   out.impacts.resize(test.impacts.size());
-  for (size_t k = 0; k < test.impacts.size(); ++k) {
+  // Each impact is analysed on its own (it writes only out.impacts[k]), so the impacts are shared
+  // out over the cores: this pass reads every sample of the test once and is memory bound.
+  auto analyse_impact = [&](size_t k) {
     const Impact& imp = test.impacts[k];
     ImpactAnalysis& a = out.impacts[k];
     const std::vector<double>& f = test.records[imp.force].samples;
@@ -215,7 +218,15 @@ ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& opt) {
       a.response_end_level.push_back(ref_amp > 0.0 ? end_amp / ref_amp : 0.0);
       a.response_rejections.push_back(why);
     }
-  }
+  };
+  const size_t threads = std::min<size_t>(test.impacts.size(), std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < threads; ++t)
+    pool.emplace_back([&, t] {
+      for (size_t k = t; k < test.impacts.size(); k += threads) analyse_impact(k);
+    });
+  for (size_t k = 0; k < test.impacts.size(); k += std::max<size_t>(threads, 1)) analyse_impact(k);
+  for (std::thread& th : pool) th.join();
   // Impact-level spread: peak force against the median of its point (per set and reference).
   std::map<std::pair<int, Dof>, std::vector<double>> levels;
   for (size_t k = 0; k < test.impacts.size(); ++k)
