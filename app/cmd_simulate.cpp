@@ -15,6 +15,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/model_file.hpp"
+#include "ema/formats/toml_fields.hpp"
 #include "ema/model/solve.hpp"
 
 namespace ema {
@@ -32,22 +33,10 @@ struct Plan {
   std::string setup;
 };
 
-class PlanReader {
+class PlanReader : public formats::TomlFields {
  public:
-  explicit PlanReader(const std::string& path) : file_(path) {}
+  explicit PlanReader(const std::string& path) : TomlFields(path) {}
 
-  std::string At(const toml::node& n) const {
-    const auto line = n.source().begin.line;
-    return line > 0 ? file_ + ":" + std::to_string(line) : file_;
-  }
-  void CheckKeys(const toml::table& t, const std::set<std::string>& allowed, const std::string& context) const {
-    for (const auto& [key, value] : t) {
-      if (allowed.count(std::string(key.str()))) continue;
-      std::string list;
-      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-      throw InputError(At(value), "unknown key '" + std::string(key.str()) + "' in " + context + " (allowed: " + list + ")");
-    }
-  }
   double Number(const toml::table& t, const std::string& key, double fallback) const {
     const toml::node* n = t.get(key);
     if (!n) return fallback;
@@ -220,9 +209,6 @@ class PlanReader {
       }
     return plan;
   }
-
- private:
-  std::string file_;
 };
 
 }  // namespace

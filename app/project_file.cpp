@@ -5,6 +5,7 @@
 #include <toml++/toml.h>
 
 #include "ema/core/error.hpp"
+#include "ema/formats/toml_fields.hpp"
 
 namespace ema::app {
 
@@ -12,20 +13,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string Where(const fs::path& file, const toml::node& node) {
-  const auto& source = node.source();
-  return file.string() + (source.begin.line ? ":" + std::to_string(source.begin.line) : std::string());
-}
+std::string Where(const fs::path& file, const toml::node& node) { return formats::TomlFields(file.string()).At(node); }
 
 void CheckKeys(const fs::path& file, const toml::table& table, const std::set<std::string>& allowed,
                const std::string& context) {
-  for (const auto& [key, value] : table) {
-    if (allowed.count(std::string(key.str()))) continue;
-    std::ostringstream list;
-    for (const auto& a : allowed) list << (list.tellp() ? ", " : "") << a;
-    throw InputError(Where(file, value), "unknown key '" + std::string(key.str()) + "' in " + context +
-                                             " (allowed: " + list.str() + ")");
-  }
+  formats::TomlFields(file.string()).CheckKeys(table, allowed, context);
 }
 
 std::string String(const fs::path& file, const toml::node& node, const std::string& key) {

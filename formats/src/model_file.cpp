@@ -12,6 +12,7 @@
 #include "ema/core/types.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/matrix_market.hpp"
+#include "ema/formats/toml_fields.hpp"
 #include "ema/model/air_film.hpp"
 
 namespace ema::formats {
@@ -20,24 +21,12 @@ namespace {
 namespace fs = std::filesystem;
 using model::Law;
 
-class Reader {
+class Reader : public TomlFields {
  public:
-  explicit Reader(const fs::path& path) : path_(path), file_(path.string()), dir_(path.parent_path()) {}
+  explicit Reader(const fs::path& path) : TomlFields(path.string()), path_(path), dir_(path.parent_path()) {}
 
-  std::string At(const toml::node& n) const {
-    const auto line = n.source().begin.line;
-    return line > 0 ? file_ + ":" + std::to_string(line) : file_;
-  }
   int Line(const toml::node& n) const { return static_cast<int>(n.source().begin.line); }
 
-  void CheckKeys(const toml::table& t, const std::set<std::string>& allowed, const std::string& context) const {
-    for (const auto& [key, value] : t) {
-      if (allowed.count(std::string(key.str()))) continue;
-      std::string list;
-      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-      throw InputError(At(value), "unknown key '" + std::string(key.str()) + "' in " + context + " (allowed: " + list + ")");
-    }
-  }
 
   const toml::node& Require(const toml::table& t, const std::string& key, const std::string& context) const {
     const toml::node* n = t.get(key);
@@ -472,7 +461,6 @@ class Reader {
 
  private:
   fs::path path_;
-  std::string file_;
   fs::path dir_;
 };
 
