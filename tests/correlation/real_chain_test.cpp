@@ -8,6 +8,7 @@
 // ~1e-4 in frequency and a few 1e-3 in MAC), which the tolerance of the parameter (5 %, issue
 // 7) covers with margin.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -21,7 +22,8 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-const fs::path kTmp = fs::path(EMA_TEST_TMP_DIR) / "correlation_real_chain";
+// One folder per process: ctest runs the tests of this file in parallel and they share file names.
+const fs::path kTmp = fs::path(EMA_TEST_TMP_DIR) / ("correlation_real_chain-" + std::to_string(getpid()));
 
 bool HaveExecutable() { return fs::exists(EMA_EXECUTABLE); }
 

@@ -1,6 +1,7 @@
 // `ema info`: summaries of real files (counts from the files themselves) and the CLI contract
 // (exit 0 / 1 / 2, --help to stdout, --json).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -23,7 +24,10 @@ struct CliRun {
 
 CliRun Ema(const std::string& args) {
   fs::create_directories(EMA_TEST_TMP_DIR);
-  const fs::path out = fs::path(EMA_TEST_TMP_DIR) / "cli_out.txt", err = fs::path(EMA_TEST_TMP_DIR) / "cli_err.txt";
+  // Named by process: ctest runs the tests of this file in parallel processes.
+  const std::string tag = std::to_string(getpid());
+  const fs::path out = fs::path(EMA_TEST_TMP_DIR) / ("cli_out-" + tag + ".txt"),
+                 err = fs::path(EMA_TEST_TMP_DIR) / ("cli_err-" + tag + ".txt");
   const std::string cmd = std::string("'") + EMA_EXECUTABLE + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
   const int status = std::system(cmd.c_str());
   auto slurp = [](const fs::path& p) {
