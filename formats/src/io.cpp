@@ -456,6 +456,22 @@ void WriteFrfSet(const std::filesystem::path& path, const FrfSet& frfs, const Wr
 // ------------------------------------------------------------------------------------------
 // Modes
 
+namespace {
+
+// Axes of a Cartesian dataset-18 system (spec §7) as the columns of a rotation matrix, in the
+// reference frame: x = Px - O, y = (Pxz - O) x x, z = x x y.
+Eigen::Matrix3d LocalAxes18(const uff::CoordinateSystem18& cs) {
+  const auto& q = cs.points;
+  const Eigen::Vector3d o(q[0], q[1], q[2]);
+  const Eigen::Vector3d ex = (Eigen::Vector3d(q[3], q[4], q[5]) - o).normalized();
+  const Eigen::Vector3d ey = (Eigen::Vector3d(q[6], q[7], q[8]) - o).cross(ex).normalized();
+  Eigen::Matrix3d axes;
+  axes << ex, ey, ex.cross(ey);
+  return axes;
+}
+
+}  // namespace
+
 ModeSet ReadModeSet(const std::filesystem::path& path) {
   uff::Reader reader(path);
   Dataset d;
@@ -465,7 +481,7 @@ ModeSet ReadModeSet(const std::filesystem::path& path) {
   };
   std::vector<Shape> shapes;
   std::map<int, std::array<double, 3>> nodes;  // id -> position (file units)
-  std::map<int, int> node_def_cs;
+  std::map<int, int> node_def_cs, node_disp_cs;
   std::map<int, uff::CoordinateSystem18> systems;
   std::vector<int> node_order;
   double length_factor = 1.0;
@@ -477,6 +493,7 @@ ModeSet ReadModeSet(const std::filesystem::path& path) {
         if (!nodes.count(static_cast<int>(n.label))) node_order.push_back(static_cast<int>(n.label));
         nodes[static_cast<int>(n.label)] = {n.xyz[0] / length_factor, n.xyz[1] / length_factor, n.xyz[2] / length_factor};
         node_def_cs[static_cast<int>(n.label)] = n.definition_cs;
+        node_disp_cs[static_cast<int>(n.label)] = n.displacement_cs;
       }
     }
     if (const auto* n2411 = std::get_if<uff::Nodes2411>(&d.body)) {
@@ -533,6 +550,32 @@ ModeSet ReadModeSet(const std::filesystem::path& path) {
     shapes.push_back(std::move(s));
   }
   if (shapes.empty()) throw InputError(path.string(), "no mode shapes (dataset 55 with analysis type 2, 3 or 7) in the file");
+  // Shape values are given in each node's displacement coordinate system (dataset 15 field 3);
+  // Test.Lab writes one Cartesian CS per node (dataset 18). Rotate them to the global frame so
+  // that every ModeSet is global and the MAC compares like with like.
+  for (const auto& [node, cs] : node_disp_cs) {
+    if (cs == 0) continue;
+    const auto it = systems.find(cs);
+    if (it == systems.end())
+      throw InputError(path.string(), "dataset 15 node " + std::to_string(node) + ": displacement coordinate system " +
+                                          std::to_string(cs) + " is not defined by a dataset 18 in the file");
+    if (it->second.type != 0)
+      throw InputError(path.string(), "dataset 18 coordinate system " + std::to_string(cs) +
+                                          ": only Cartesian (type 0) displacement systems are supported");
+    const Eigen::Matrix3d axes = LocalAxes18(it->second);  // columns: local x, y, z in global
+    for (auto& shape : shapes)
+      for (int first : {1, 4}) {  // translations, then rotations
+        Eigen::Vector3cd local = Eigen::Vector3cd::Zero();
+        bool any = false;
+        for (int k = 0; k < 3; ++k) {
+          const auto v = shape.values.find({node, first + k});
+          if (v != shape.values.end()) local[k] = v->second, any = true;
+        }
+        if (!any) continue;
+        const Eigen::Vector3cd global = axes.cast<std::complex<double>>() * local;
+        for (int k = 0; k < 3; ++k) shape.values[{node, first + k}] = global[k];
+      }
+  }
   ModeSet set;
   set.source = path.filename().string();
   // DOFs: every (node, direction) that is non-zero in at least one mode (unused slots of a
@@ -561,13 +604,9 @@ ModeSet ReadModeSet(const std::filesystem::path& path) {
     std::array<double, 3> p = nodes[id];
     const auto cs_it = systems.find(node_def_cs[id]);
     if (node_def_cs[id] != 0 && cs_it != systems.end() && cs_it->second.type == 0) {
-      // Local Cartesian CS of dataset 18 (spec §7): x = Px - O, y = (Pxz - O) x x, z = x x y.
       const auto& q = cs_it->second.points;
       const Eigen::Vector3d o(q[0], q[1], q[2]);
-      const Eigen::Vector3d ex = (Eigen::Vector3d(q[3], q[4], q[5]) - o).normalized();
-      const Eigen::Vector3d ey = (Eigen::Vector3d(q[6], q[7], q[8]) - o).cross(ex).normalized();
-      const Eigen::Vector3d ez = ex.cross(ey);
-      const Eigen::Vector3d g = o / length_factor + p[0] * ex + p[1] * ey + p[2] * ez;
+      const Eigen::Vector3d g = o / length_factor + LocalAxes18(cs_it->second) * Eigen::Vector3d(p[0], p[1], p[2]);
       p = {g.x(), g.y(), g.z()};
     }
     set.geometry.push_back(Node{id, Eigen::Vector3d(p[0], p[1], p[2])});

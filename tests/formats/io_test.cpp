@@ -321,3 +321,55 @@ TEST(FormatsIo, CsvErrorsNameFileLineAndColumn) {
 
 }  // namespace
 }  // namespace ema::formats
+
+namespace ema::formats {
+namespace {
+
+// A Test.Lab-style file: node 7 measured in its own displacement coordinate system SYS1 of
+// spec §7 (x̂ = −X, ŷ = +Y, ẑ = −Z). The reader must hand back shapes in the global frame:
+// local (1, 2, 3) becomes global (−1, 2, −3) exactly (a rotation by ±1 entries, no rounding).
+TEST(IoModeSet, DisplacementCoordinateSystemsAreRotatedToGlobal) {
+  uff::CoordinateSystems18 cs;
+  uff::CoordinateSystem18 sys1;
+  sys1.number = 1;
+  sys1.name = "SYS1";
+  sys1.points = {-2.4, -0.95, 0.0, -3.4, -0.95, 0.0, -3.4, -0.95, -1.0};
+  cs.systems.push_back(sys1);
+  uff::Nodes15 nodes;
+  nodes.nodes.push_back({7, 0, 1, 8, {0.1, 0.2, 0.3}});
+  nodes.nodes.push_back({8, 0, 0, 8, {0.4, 0.5, 0.6}});
+  uff::Data55 mode;
+  mode.reals = {-1.0, 2 * 3.14159265358979 * 50.0, 1.0, 0.0};  // complex pole, modal A
+  mode.nodes.push_back({7, {1.0, 0.0, 2.0, 0.0, 3.0, 0.5}});
+  mode.nodes.push_back({8, {1.0, 0.0, 2.0, 0.0, 3.0, 0.5}});
+  const fs::path p = fs::path(EMA_TEST_TMP_DIR) / "io_displacement_cs.uff";
+  fs::create_directories(EMA_TEST_TMP_DIR);
+  uff::WriteFile(p, {uff::Dataset{18, 0, 0, {}, cs}, uff::Dataset{15, 0, 0, {}, nodes}, uff::Dataset{55, 0, 0, {}, mode}});
+  const ModeSet set = ReadModeSet(p);
+  ASSERT_EQ(set.modes.size(), 1u);
+  auto value = [&](int node, int dir) {
+    for (size_t i = 0; i < set.dofs.size(); ++i)
+      if (set.dofs[i] == Dof{node, dir}) return set.modes[0].shape[static_cast<Eigen::Index>(i)];
+    ADD_FAILURE() << "missing DOF " << node << " " << dir;
+    return std::complex<double>();
+  };
+  EXPECT_NEAR(std::abs(value(7, 1) - std::complex<double>(-1.0, 0.0)), 0.0, 1e-12);
+  EXPECT_NEAR(std::abs(value(7, 2) - std::complex<double>(2.0, 0.0)), 0.0, 1e-12);
+  EXPECT_NEAR(std::abs(value(7, 3) - std::complex<double>(-3.0, -0.5)), 0.0, 1e-12);
+  // Node 8 is in the global system: untouched.
+  EXPECT_NEAR(std::abs(value(8, 1) - std::complex<double>(1.0, 0.0)), 0.0, 1e-12);
+  EXPECT_NEAR(std::abs(value(8, 3) - std::complex<double>(3.0, 0.5)), 0.0, 1e-12);
+
+  // A node that names a system the file does not define is an error that says which.
+  nodes.nodes[1].displacement_cs = 5;
+  uff::WriteFile(p, {uff::Dataset{18, 0, 0, {}, cs}, uff::Dataset{15, 0, 0, {}, nodes}, uff::Dataset{55, 0, 0, {}, mode}});
+  try {
+    ReadModeSet(p);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("displacement coordinate system 5"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ema::formats
