@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 #include <toml++/toml.h>
@@ -13,6 +14,7 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/matrix_market.hpp"
 #include "ema/formats/toml_fields.hpp"
+#include "ema/formats/uff.hpp"
 #include "ema/model/air_film.hpp"
 
 namespace ema::formats {
@@ -20,6 +22,22 @@ namespace {
 
 namespace fs = std::filesystem;
 using model::Law;
+
+// Calls `row` with the line number and the fields of every data line of a small CSV file (curve,
+// DOF map, node list): blank and '#' lines skipped, ',' ';' and tabs read as blanks. Header
+// lines are the caller's to recognise, since only it knows what a data row looks like.
+void ForEachCsvRow(std::istream& in, const std::function<void(int line, std::istringstream& fields)>& row) {
+  std::string line;
+  int no = 0;
+  while (std::getline(in, line)) {
+    ++no;
+    if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
+    for (char& c : line)
+      if (c == ',' || c == ';' || c == '\t') c = ' ';
+    std::istringstream fields(line);
+    row(no, fields);
+  }
+}
 
 class Reader : public TomlFields {
  public:
@@ -77,22 +95,15 @@ class Reader : public TomlFields {
     const fs::path f = Resolve(String(n, "file"));
     std::ifstream in(f);
     if (!in) throw InputError(At(n), "cannot open curve file '" + f.string() + "'");
-    std::string line;
-    int no = 0;
-    while (std::getline(in, line)) {
-      ++no;
-      if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
-      for (char& c : line)
-        if (c == ',' || c == ';' || c == '\t') c = ' ';
-      std::istringstream s(line);
+    ForEachCsvRow(in, [&](int no, std::istringstream& s) {
       double a = 0, b = 0;
       if (!(s >> a >> b)) {
-        if (x->empty()) continue;  // header line(s) before the data
+        if (x->empty()) return;  // header line(s) before the data
         throw InputError(f.string() + ":" + std::to_string(no), "expected two numbers 'x,y'");
       }
       x->push_back(a);
       y->push_back(b);
-    }
+    });
   }
 
   Law ParseLaw(const toml::node& node, const std::string& context) const {
@@ -229,18 +240,11 @@ class Reader : public TomlFields {
     // DOF map: node,dof per matrix row.
     std::ifstream in(dofs);
     if (!in) throw InputError(At(*t.get("dofs")), "cannot open DOF map '" + dofs.string() + "'");
-    std::string line;
-    int no = 0;
-    while (std::getline(in, line)) {
-      ++no;
-      if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
-      for (char& c : line)
-        if (c == ',' || c == ';' || c == '\t') c = ' ';
-      std::istringstream s(line);
+    ForEachCsvRow(in, [&](int no, std::istringstream& s) {
       long node = 0;
       std::string dof;
       if (!(s >> node >> dof)) {
-        if (no == 1) continue;  // header
+        if (no == 1) return;  // header
         throw InputError(dofs.string() + ":" + std::to_string(no), "expected 'node,dof'");
       }
       int code = 0;
@@ -248,11 +252,11 @@ class Reader : public TomlFields {
       for (int i = 0; i < 6; ++i)
         if (dof == kNames[i] || dof == std::to_string(i + 1)) code = i + 1;
       if (code == 0) {
-        if (no == 1 && m->fe.dofs.empty()) continue;  // header such as "node,dof"
+        if (no == 1 && m->fe.dofs.empty()) return;  // header such as "node,dof"
         throw InputError(dofs.string() + ":" + std::to_string(no), "dof must be 1..6 or ux..rz, found '" + dof + "'");
       }
       m->fe.dofs.push_back({static_cast<int>(node), code});
-    }
+    });
     if (m->fe.dofs.size() != static_cast<std::size_t>(m->fe.mass.rows()))
       throw InputError(dofs.string(), "DOF map has " + std::to_string(m->fe.dofs.size()) + " rows but " + mass.string() +
                                           " has " + std::to_string(m->fe.mass.rows()) + " rows");
@@ -262,67 +266,32 @@ class Reader : public TomlFields {
     if (const toml::node* nodes = t.get("nodes")) ReadNodes(Resolve(String(*nodes, "nodes")), *nodes, m);
   }
 
-  /// nodes.csv (node,x,y,z) or a UFF file with dataset 15 or 2411.
+  /// nodes.csv (node,x,y,z) or a UFF file with dataset 15 or 2411 (read with the UFF reader).
   void ReadNodes(const fs::path& f, const toml::node& key, model::Model* m) const {
     std::ifstream in(f);
     if (!in) throw InputError(At(key), "cannot open nodes file '" + f.string() + "'");
-    std::vector<std::string> lines;
-    for (std::string l; std::getline(in, l);) lines.push_back(l);
-    auto is_delim = [](const std::string& l) { return l.size() >= 6 && l.substr(0, 6) == "    -1"; };
-    bool uff = false;
-    for (const auto& l : lines)
-      if (l.find_first_not_of(" \t\r") != std::string::npos) { uff = is_delim(l); break; }
-    auto fortran = [](std::string s) {
-      for (char& c : s)
-        if (c == 'D' || c == 'd') c = 'e';
-      return s;
-    };
-    if (!uff) {
-      for (std::size_t i = 0; i < lines.size(); ++i) {
-        std::string l = lines[i];
-        if (l.find_first_not_of(" \t\r") == std::string::npos || l[0] == '#') continue;
-        for (char& c : l)
-          if (c == ',' || c == ';' || c == '\t') c = ' ';
-        std::istringstream s(l);
-        long id;
-        double x, y, z;
-        if (!(s >> id >> x >> y >> z)) {
-          if (i == 0) continue;
-          throw InputError(f.string() + ":" + std::to_string(i + 1), "expected 'node,x,y,z'");
-        }
-        m->fe.node_positions[static_cast<int>(id)] = {x, y, z};
+    if (uff::LooksLikeUff(f)) {
+      uff::Reader reader(f);
+      uff::Dataset d;
+      while (reader.Next(&d)) {
+        const std::vector<uff::NodeRecord>* nodes = nullptr;
+        if (const auto* n15 = std::get_if<uff::Nodes15>(&d.body)) nodes = &n15->nodes;
+        if (const auto* n2411 = std::get_if<uff::Nodes2411>(&d.body)) nodes = &n2411->nodes;
+        if (!nodes) continue;
+        for (const uff::NodeRecord& n : *nodes)
+          m->fe.node_positions[static_cast<int>(n.label)] = {n.xyz[0], n.xyz[1], n.xyz[2]};
       }
       return;
     }
-    for (std::size_t i = 0; i < lines.size(); ++i) {
-      if (!is_delim(lines[i]) || i + 1 >= lines.size()) continue;
-      std::istringstream ds(lines[i + 1]);
-      int type = 0;
-      ds >> type;
-      std::size_t j = i + 2;
-      if (type == 15) {
-        for (; j < lines.size() && !is_delim(lines[j]); ++j) {
-          std::istringstream s(fortran(lines[j]));
-          long id, a, b, c;
-          double x, y, z;
-          if (!(s >> id >> a >> b >> c >> x >> y >> z))
-            throw InputError(f.string() + ":" + std::to_string(j + 1), "dataset 15: expected 'node defcs dispcs color x y z'");
-          m->fe.node_positions[static_cast<int>(id)] = {x, y, z};
-        }
-      } else if (type == 2411) {
-        for (; j + 1 < lines.size() && !is_delim(lines[j]); j += 2) {
-          std::istringstream s1(lines[j]), s2(fortran(lines[j + 1]));
-          long id;
-          double x, y, z;
-          if (!(s1 >> id) || !(s2 >> x >> y >> z))
-            throw InputError(f.string() + ":" + std::to_string(j + 1), "dataset 2411: expected node record pair");
-          m->fe.node_positions[static_cast<int>(id)] = {x, y, z};
-        }
-      } else {
-        for (; j < lines.size() && !is_delim(lines[j]); ++j) {}
+    ForEachCsvRow(in, [&](int no, std::istringstream& s) {
+      long id;
+      double x, y, z;
+      if (!(s >> id >> x >> y >> z)) {
+        if (no == 1) return;  // header
+        throw InputError(f.string() + ":" + std::to_string(no), "expected 'node,x,y,z'");
       }
-      i = j;
-    }
+      m->fe.node_positions[static_cast<int>(id)] = {x, y, z};
+    });
   }
 
   model::Model Read() const {

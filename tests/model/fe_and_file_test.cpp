@@ -7,6 +7,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/matrix_market.hpp"
 #include "ema/formats/model_file.hpp"
+#include "ema/formats/uff.hpp"
 #include "ema/model/solve.hpp"
 #include "test_util.hpp"
 
@@ -52,6 +53,25 @@ fs::path WriteCantilever(const fs::path& dir, int elements, double length, doubl
                             "[model]\nname = \"cantilever\"\n[fe]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n"
                             "dofs = \"dofs.csv\"\nnodes = \"nodes.csv\"\n[[point]]\nid = 7\nnode = " +
                                 std::to_string(elements) + "\n");
+}
+
+// `nodes =` may name a UFF file (dataset 15) instead of a CSV: the same cantilever with its node
+// list written as UFF 15 gives the same node positions (exact: the values are short decimals).
+TEST(FiniteElement, NodesFromUffDataset15MatchTheCsv) {
+  const fs::path dir = testing::TempDir("cantilever-uff-nodes");
+  const fs::path csv_model = WriteCantilever(dir, 4, 1.0, 1.0, 1.0);
+  const Model from_csv = formats::ReadModelFile(csv_model);
+  formats::uff::Nodes15 nodes;
+  for (const auto& [id, xyz] : from_csv.fe.node_positions)
+    nodes.nodes.push_back({id, 0, 0, 8, {xyz[0], xyz[1], xyz[2]}});
+  formats::uff::WriteFile(dir / "nodes.unv", {formats::uff::Dataset{15, 0, 0, {}, nodes}});
+  std::ifstream in(csv_model);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("nodes.csv"), 9, "nodes.unv");
+  const Model from_uff = formats::ReadModelFile(testing::WriteText(dir / "beam-uff.toml", text));
+  ASSERT_EQ(from_uff.fe.node_positions.size(), from_csv.fe.node_positions.size());
+  for (const auto& [id, xyz] : from_csv.fe.node_positions)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(from_uff.fe.node_positions.at(id)[k], xyz[k], 1e-9) << "node " << id;
 }
 
 TEST(FiniteElement, CantileverMatchesEulerBernoulliThroughSparsePath) {
