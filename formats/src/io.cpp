@@ -380,6 +380,19 @@ void WriteFrfSet(const std::filesystem::path& path, const FrfSet& frfs, const Wr
     throw InputError("UFF writer", "FrfSet: one H matrix per reference expected");
   const double dx = frfs.frequency_hz[1] - frfs.frequency_hz[0];
   const auto [l, fe] = ExponentsOf(frfs.output_quantity);
+  // What an FRF and its coherence share: the DOFs (record 6) and the frequency axis of lines
+  // first..last.
+  auto set_dofs_and_axis = [&](int r, int o, Eigen::Index first, Eigen::Index last, Function58* f) {
+    f->response_node = frfs.outputs[o].node;
+    f->response_direction = frfs.outputs[o].direction;
+    f->reference_node = frfs.references[r].node;
+    f->reference_direction = frfs.references[r].direction;
+    f->count = last - first + 1;
+    f->even = true;
+    f->x_min = frfs.frequency_hz[first];
+    f->dx = dx;
+    f->axes[0] = {18, 0, 0, 0, "Frequency", "Hz"};
+  };
   std::vector<Dataset> out;
   int id = 0;
   for (int r = 0; r < frfs.ReferenceCount(); ++r) {
@@ -403,16 +416,8 @@ void WriteFrfSet(const std::filesystem::path& path, const FrfSet& frfs, const Wr
       f.function_type = 4;
       f.function_id = ++id;
       f.load_case = 0;
-      f.response_node = frfs.outputs[o].node;
-      f.response_direction = frfs.outputs[o].direction;
-      f.reference_node = frfs.references[r].node;
-      f.reference_direction = frfs.references[r].direction;
+      set_dofs_and_axis(r, o, first, last, &f);
       f.ordinate_type = 6;
-      f.count = last - first + 1;
-      f.even = true;
-      f.x_min = frfs.frequency_hz[first];
-      f.dx = dx;
-      f.axes[0] = {18, 0, 0, 0, "Frequency", "Hz"};
       f.axes[1] = {static_cast<int>(frfs.output_quantity), l, fe, 0, LabelOf(frfs.output_quantity), frfs.response_unit};
       f.axes[2] = {13, 0, 1, 0, "Force", frfs.force_unit};
       f.axes[3] = {0, 0, 0, 0, "NONE", "NONE"};
@@ -431,16 +436,8 @@ void WriteFrfSet(const std::filesystem::path& path, const FrfSet& frfs, const Wr
                 "NONE", "NONE"};
         g.function_type = 6;
         g.function_id = id;
-        g.response_node = frfs.outputs[o].node;
-        g.response_direction = frfs.outputs[o].direction;
-        g.reference_node = frfs.references[r].node;
-        g.reference_direction = frfs.references[r].direction;
+        set_dofs_and_axis(r, o, cf, cl, &g);
         g.ordinate_type = 4;
-        g.count = cl - cf + 1;
-        g.even = true;
-        g.x_min = frfs.frequency_hz[cf];
-        g.dx = dx;
-        g.axes[0] = {18, 0, 0, 0, "Frequency", "Hz"};
         g.axes[1] = {1, 0, 0, 0, "Coherence", "NONE"};
         g.axes[2] = {0, 0, 0, 0, "NONE", "NONE"};
         g.axes[3] = {0, 0, 0, 0, "NONE", "NONE"};
