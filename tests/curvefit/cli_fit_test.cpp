@@ -21,7 +21,7 @@ int RunEma(const std::string& args) {
 class FitCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!fs::exists(EMA_EXECUTABLE)) GTEST_SKIP() << "ema not built";
+    if (!fs::exists(EMA_EXECUTABLE)) FAIL() << "ema executable not built: " << EMA_EXECUTABLE;
     // One folder per test: ctest runs the tests of this fixture in parallel processes.
     dir_ = fs::path(EMA_TEST_TMP_DIR) / ("curvefit_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);

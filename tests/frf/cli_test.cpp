@@ -41,7 +41,7 @@ RunResult RunEma(const std::string& arguments, const fs::path& dir) {
 class FrfCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!fs::exists(EMA_EXECUTABLE)) GTEST_SKIP() << "ema executable not built: " << EMA_EXECUTABLE;
+    if (!fs::exists(EMA_EXECUTABLE)) FAIL() << "ema executable not built: " << EMA_EXECUTABLE;
     dir_ = fs::path(EMA_TEST_TMP_DIR) / ("frf_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
