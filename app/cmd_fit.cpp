@@ -159,8 +159,8 @@ int RunFit(const std::vector<std::string>& args) {
   if (fit_options.method == curvefit::FitMethod::kPeak && (!stab_path.empty() || !plot_path.empty()))
     throw UsageError("--stabilisation and --plot need --method polymax");
 
-  // A directory is read as column-text FRFs (the frf-meas-point layout, see formats/io.hpp).
-  const FrfSet frfs = std::filesystem::is_directory(input) ? formats::ReadMeasPointFrfs(input) : formats::ReadFrfSet(input);
+  // UFF 58, or an FRF table / a folder of FRF columns (formats::ReadFrfTable).
+  const FrfSet frfs = formats::ReadFrfSet(input);
   curvefit::FitResult fit;
   try {
     fit = curvefit::Fit(frfs, fit_options, input, [](double f, std::string_view stage) {

@@ -57,6 +57,35 @@ TEST_F(FitCli, MeasuredBeamWritesEveryOutput) {
   EXPECT_EQ(s.at("selected").size(), 6u);
 }
 
+nlohmann::json ReadJson(const fs::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+TEST_F(FitCli, FrfTableFitsLikeTheIndexedFolder) {
+  // The sample's three column files written as one FRF table (any DOF names; here the sample's
+  // own): the fit must be the same to the last digit, since the numbers read are the same.
+  const fs::path table = dir_ / "beam.csv";
+  {
+    std::ifstream c1(sample_ + "/meas_point_1.txt"), c2(sample_ + "/meas_point_2.txt"), c3(sample_ + "/meas_point_3.txt");
+    std::ofstream out(table);
+    out << "# quantity: acceleration\nfrequency_hz, 1+X/1+X, 1+X/2+X, 1+X/3+X\n";
+    std::string a, b, c;
+    for (int line = 0; std::getline(c1, a) && std::getline(c2, b) && std::getline(c3, c); ++line)
+      out << line << ", " << a << ", " << b << ", " << c << "\n";
+  }
+  const std::string options = " --band 30:300 --order-max 40";
+  ASSERT_EQ(RunEma("fit " + sample_ + " -o " + (dir_ / "a.unv").string() + " --json " + (dir_ / "a.json").string() + options), 0);
+  ASSERT_EQ(RunEma("fit " + table.string() + " -o " + (dir_ / "b.unv").string() + " --json " + (dir_ / "b.json").string() + options), 0);
+  const nlohmann::json a = ReadJson(dir_ / "a.json"), b = ReadJson(dir_ / "b.json");
+  ASSERT_EQ(a.at("modes").size(), 3u);  // 52, 142 and 279 Hz in 30..300 Hz
+  ASSERT_EQ(b.at("modes").size(), a.at("modes").size());
+  for (size_t k = 0; k < a["modes"].size(); ++k) {
+    EXPECT_EQ(b["modes"][k]["frequency_hz"], a["modes"][k]["frequency_hz"]);
+    EXPECT_EQ(b["modes"][k]["shape"], a["modes"][k]["shape"]);
+  }
+}
+
 TEST_F(FitCli, BadInputAndUsage) {
   const fs::path unv = dir_ / "bad.unv";
   EXPECT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --band 2000:3000"), 1);  // no lines in band
