@@ -111,8 +111,8 @@ int RunFit(const std::vector<std::string>& args) {
   int order_max = 0, threads = 0;
   curvefit::FitOptions fit_options;
   options.add_options()
-      ("input", po::value(&input)->required(), "FRF file (UFF 58, function type 4), or a directory holding\n"
-                                               "meas_point_{1,2,3}.txt column texts")
+      ("input", po::value(&input)->required(), "FRFs: UFF 58 (function type 4), an FRF table or a folder\n"
+                                               "of FRF columns with its frfs.csv index (docs/formats.md)")
       ("output,o", po::value(&output)->required(), "mode shapes out (UFF 55 complex modes)")
       ("band", po::value(&band), "analysis band LO:HI in Hz (default: all lines above DC)")
       ("order-max", po::value(&order_max), "highest PolyMAX order (default: ceil(120/references), limited by the lines)")
@@ -143,6 +143,7 @@ int RunFit(const std::vector<std::string>& args) {
   }
   if (vm.count("order-max") && order_max < 1) throw UsageError("--order-max: expected a positive order");
   fit_options.polymax.order_max = order_max;
+  if (threads < 0) throw UsageError("--threads: expected 0 (all cores) or a positive count");
   fit_options.polymax.threads = threads;
   if (select != "auto") {
     std::stringstream ss(select);
