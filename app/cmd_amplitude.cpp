@@ -69,7 +69,8 @@ json AmplitudeJson(const correlation::AmplitudeResult& r) {
                         {"frequency_hz", p.frequency_hz},
                         {"damping_ratio", p.damping_ratio},
                         {"frequency_std_hz", NumberOrNull(p.frequency_std_hz)},
-                        {"damping_ratio_std", NumberOrNull(p.damping_ratio_std)}});
+                        {"damping_ratio_std", NumberOrNull(p.damping_ratio_std)},
+                        {"poles", p.poles}});
     modes.push_back({{"mode", i + 1},
                      {"levels", levels},
                      {"frequency_trend", correlation::FrequencyTrendToString(m.frequency_trend)},

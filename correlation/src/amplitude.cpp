@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <sstream>
 
 #include "ema/core/error.hpp"
@@ -126,6 +127,64 @@ std::string Reading(const AmplitudeMode& m, LevelKind kind) {
   return what + ": " + f + z + " from " + Num(p0.level, 3) + " to " + Num(pt.level, 3) + unit;
 }
 
+/// Merges the split poles of one level in place (AmplitudeOptions::split_mac); `count` gets,
+/// per remaining mode, how many poles it stands for.
+void MergeSplitPoles(const AmplitudeOptions& options, AmplitudeLevel* level, std::vector<int>* count) {
+  ModeSet& set = level->modes;
+  const size_t n = set.modes.size();
+  count->assign(n, 1);
+  if (options.split_mac > 1.0 || n < 2) return;
+  std::vector<int> group(n);
+  for (size_t i = 0; i < n; ++i) group[i] = static_cast<int>(i);
+  std::function<int(int)> find = [&](int i) { return group[i] == i ? i : group[i] = find(group[i]); };
+  bool any = false;
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j) {
+      const Mode& a = set.modes[i];
+      const Mode& b = set.modes[j];
+      if (a.shape.size() == 0 || a.shape.size() != b.shape.size() || a.shape.norm() == 0.0 || b.shape.norm() == 0.0)
+        continue;
+      const double df = std::abs(a.frequency_hz - b.frequency_hz) / std::max(a.frequency_hz, b.frequency_hz);
+      if (df <= options.split_max_relative_difference && Mac(a.shape, b.shape) >= options.split_mac) {
+        group[static_cast<size_t>(find(static_cast<int>(j)))] = find(static_cast<int>(i));
+        any = true;
+      }
+    }
+  if (!any) return;
+  ModeSet merged = set;
+  merged.modes.clear();
+  std::vector<ModeUncertainty> sigma;
+  count->clear();
+  for (size_t root = 0; root < n; ++root) {
+    if (find(static_cast<int>(root)) != static_cast<int>(root)) continue;
+    double sw = 0.0, f = 0.0, z = 0.0, vf = 0.0, vz = 0.0, heaviest = -1.0;
+    bool sf = true, sz = true;
+    int members = 0;
+    size_t best = root;
+    for (size_t i = 0; i < n; ++i) {
+      if (find(static_cast<int>(i)) != static_cast<int>(root)) continue;
+      const Mode& m = set.modes[i];
+      const double amp = m.unit_modal_mass ? std::pow(m.shape.squaredNorm(), 2) : 1.0;
+      const double w = amp / std::max(m.damping_ratio, 1e-6);
+      sw += w, f += w * m.frequency_hz, z += w * m.damping_ratio, ++members;
+      if (w > heaviest) heaviest = w, best = i;
+      const ModeUncertainty u = level->uncertainty.empty() ? ModeUncertainty{} : level->uncertainty[i];
+      sf = sf && std::isfinite(u.frequency_std_hz), sz = sz && std::isfinite(u.damping_ratio_std);
+      vf += w * w * (std::isfinite(u.frequency_std_hz) ? u.frequency_std_hz * u.frequency_std_hz : 0.0);
+      vz += w * w * (std::isfinite(u.damping_ratio_std) ? u.damping_ratio_std * u.damping_ratio_std : 0.0);
+    }
+    Mode m = set.modes[best];
+    m.frequency_hz = f / sw;
+    m.damping_ratio = z / sw;
+    m.pole = FrequencyAndDampingToPole(m.frequency_hz, m.damping_ratio);
+    merged.modes.push_back(m);
+    sigma.push_back({sf ? std::sqrt(vf) / sw : kNaN, sz ? std::sqrt(vz) / sw : kNaN});
+    count->push_back(members);
+  }
+  set = std::move(merged);
+  if (!level->uncertainty.empty()) level->uncertainty = std::move(sigma);
+}
+
 }  // namespace
 
 std::string LevelKindToString(LevelKind kind) {
@@ -177,6 +236,9 @@ bool AmplitudeOptions::IsValid(std::string* error) const {
   if (!(damping_floor_relative > 0.0))
     return fail("damping_floor_relative (" + Num(damping_floor_relative, 6) + ") must be > 0");
   if (!(significance > 0.0)) return fail("significance (" + Num(significance, 6) + ") must be > 0");
+  if (!(split_mac >= 0.0)) return fail("split_mac (" + Num(split_mac, 6) + ") must be >= 0");
+  if (!(split_max_relative_difference >= 0.0))
+    return fail("split_max_relative_difference (" + Num(split_max_relative_difference, 6) + ") must be >= 0");
   return true;
 }
 
@@ -258,6 +320,9 @@ AmplitudeResult AnalyseAmplitude(std::vector<AmplitudeLevel> levels, LevelKind l
       throw InputError(levels[i].modes.source, "same level " + Num(levels[i].level, 6) + " as " +
                                                    levels[i - 1].modes.source + ": give each level once");
 
+  std::vector<std::vector<int>> merged_count(levels.size());
+  for (std::size_t l = 0; l < levels.size(); ++l) MergeSplitPoles(options, &levels[l], &merged_count[l]);
+
   AmplitudeResult result;
   result.level_kind = level_kind;
   for (const AmplitudeLevel& l : levels) result.levels.push_back(l.level);
@@ -278,6 +343,7 @@ AmplitudeResult AnalyseAmplitude(std::vector<AmplitudeLevel> levels, LevelKind l
       p.damping_ratio_std = levels[level].uncertainty[static_cast<size_t>(mode)].damping_ratio_std;
     }
     p.mode_index = mode;
+    p.poles = merged_count[level][static_cast<size_t>(mode)];
     return p;
   };
   std::vector<AmplitudeMode> tracks(ref_set.modes.size());

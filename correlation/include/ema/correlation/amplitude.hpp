@@ -55,6 +55,15 @@ struct AmplitudeOptions {
   /// A change is significant when it exceeds `significance` standard deviations (3 = about
   /// 0.3 % false alarms per test for Gaussian errors).
   double significance = 3.0;
+  /// Split poles: an impact on a micro-slipping joint sweeps the amplitude down through one
+  /// record, and a curve fit often describes that one mode by two poles with the same shape
+  /// (the slipping head, heavily damped, and the stuck tail). Modes of one level whose shapes
+  /// agree to MAC >= split_mac and whose frequencies differ by at most
+  /// split_max_relative_difference are merged into one point: frequency and damping averaged
+  /// with the weight |φ|⁴/ζ (the energy of each pole's free decay when the shapes are scaled to
+  /// unit modal mass; 1/ζ otherwise). split_mac > 1 turns merging off.
+  double split_mac = 0.95;
+  double split_max_relative_difference = 0.03;
 
   /// False (with the reason in *error) when a field is out of range.
   bool IsValid(std::string* error) const;
@@ -67,7 +76,8 @@ struct AmplitudePoint {
   double damping_ratio = kNaN;
   double frequency_std_hz = kNaN;   ///< σ of the fit (NaN when unknown; the floor is not included)
   double damping_ratio_std = kNaN;
-  int mode_index = -1;              ///< index of the mode in its level's ModeSet
+  int mode_index = -1;              ///< index of the mode in its level's ModeSet (the heaviest pole if merged)
+  int poles = 1;                    ///< poles merged into this point (split poles, see AmplitudeOptions)
 };
 
 /// "softening", "hardening", "non-monotonic", "none".
