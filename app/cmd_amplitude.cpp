@@ -15,6 +15,7 @@
 #include "ema/correlation/amplitude.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
+#include "report.hpp"
 
 namespace ema {
 namespace {
@@ -92,12 +93,12 @@ int RunAmplitude(const std::vector<std::string>& args) {
   namespace po = cli::po;
   const std::string usage =
       "ema amplitude --level F=MODES.unv --level F=MODES.unv [...] [--level-kind peak_force|rms_force|response]\n"
-      "              [--json AMP.json]";
+      "              [--json AMP.json] [--report AMP.html]";
   po::options_description options(
       "ema amplitude: does a mode depend on the excitation level? (frequency and damping against level, "
       "docs/amplitude.md)");
   std::vector<std::string> level_args;
-  std::string kind_name = "peak_force", json_path;
+  std::string kind_name = "peak_force", json_path, report_path;
   correlation::AmplitudeOptions ao;
   cli::AddHelp(&options);
   options.add_options()
@@ -106,6 +107,7 @@ int RunAmplitude(const std::vector<std::string>& args) {
        "`ema fit --json` beside it gives each mode's σ). Two or more.")
       ("level-kind", po::value(&kind_name), "what LEVEL is: peak_force (default, N), rms_force (N) or response")
       ("json", po::value(&json_path), "result as JSON (cli.md)")
+      ("report", po::value(&report_path), "self-contained HTML page: f and damping against level per mode")
       ("mac-min", po::value(&ao.mac_min), "MAC a pair needs across levels (default 0.8)")
       ("frequency-floor-pct", po::value(&ao.frequency_floor_pct),
        "frequency repeatability, % of f, added to each point's σ (default 0.03)")
@@ -139,12 +141,13 @@ int RunAmplitude(const std::vector<std::string>& args) {
     if (!(level > 0.0) || !std::isfinite(level)) throw UsageError("--level: level must be > 0, got '" + a.substr(0, eq) + "'");
     parsed.push_back({level, a.substr(eq + 1)});
   }
-  if (!json_path.empty()) {
+  for (const auto& [option, out] : {std::pair<std::string, std::string>{"--json", json_path}, {"--report", report_path}}) {
+    if (out.empty()) continue;
     std::error_code ec;
     for (const auto& [level, path] : parsed)
-      if (std::filesystem::path(json_path) == std::filesystem::path(path) ||
-          (std::filesystem::exists(json_path, ec) && std::filesystem::equivalent(json_path, path, ec)))
-        throw UsageError("--json " + json_path + " names an input file");
+      if (std::filesystem::path(out) == std::filesystem::path(path) ||
+          (std::filesystem::exists(out, ec) && std::filesystem::equivalent(out, path, ec)))
+        throw UsageError(option + " " + out + " names an input file");
   }
   std::vector<correlation::AmplitudeLevel> levels;
   for (const auto& [level, path] : parsed) {
@@ -173,6 +176,15 @@ int RunAmplitude(const std::vector<std::string>& args) {
   if (!r.unpaired.empty())
     std::cout << r.unpaired.size() << " mode(s) found at one level only (not followed)\n";
   if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, AmplitudeJson(r).dump(2) + "\n");
+  if (!report_path.empty()) {
+    report::ReportInput page;
+    page.title = "ema amplitude";
+    page.subtitle = std::to_string(r.levels.size()) + " levels (" + correlation::LevelKindToString(kind) + ")";
+    std::istringstream lines(r.summary);
+    for (std::string line; std::getline(lines, line);) page.summary.push_back(line);
+    page.amplitude = AmplitudeJson(r);
+    formats::WriteTextFileAtomically(report_path, report::RenderHtml(page));
+  }
   return 0;
 }
 

@@ -66,7 +66,10 @@ TEST(AmplitudeCli, FourLevelsGiveTheJsonOfTheContract) {
     const fs::path p = WriteModes(dir, "m" + std::to_string(i) + ".unv", 100.0 * (1 + df[i] / 100), 0.01 * zf[i]);
     args += " --level " + std::to_string(levels[i]) + "=" + p.string();
   }
-  ASSERT_EQ(RunEma(args + " --json " + (dir / "amp.json").string(), dir), 0) << Slurp(dir / "stderr.txt");
+  ASSERT_EQ(RunEma(args + " --json " + (dir / "amp.json").string() + " --report " + (dir / "amp.html").string(), dir), 0)
+      << Slurp(dir / "stderr.txt");
+  const std::string html = Slurp(dir / "amp.html");  // the page embeds the JSON it draws
+  EXPECT_NE(html.find("\"frequency_trend\":\"softening\""), std::string::npos);
   std::ifstream in(dir / "amp.json");
   const json j = json::parse(in);
   EXPECT_EQ(j["level_kind"], "peak_force");
