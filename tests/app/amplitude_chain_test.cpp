@@ -166,5 +166,36 @@ TEST(AmplitudeChain, MicroSlipJointSoftensAndDampsMoreAndTheLinearJointDoesNot) 
   }
 }
 
+TEST(AmplitudeChain, RealHammerImpactsOfALinearArticleSplitByForceStayNone) {
+  // Real data (shared/data/hammer-pyfrf): five impacts of 69-89 N on one article, split into two
+  // force bins, fitted and compared: a linear structure over a 1.15x force range, so every mode
+  // must come out `none` (the floors are meant for exactly this repeatability).
+  const fs::path data = fs::path(EMA_SHARED_DATA_DIR) / "hammer-pyfrf" / "hammer-5-impacts.unv";
+  if (!fs::exists(data)) GTEST_SKIP() << "shared data not found: " << data;
+  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / ("amplitude_real_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string d = dir.string() + "/";
+  ASSERT_EQ(RunEma("frf " + data.string() + " -o " + d + "frf.unv --force-bins 2 --json " + d + "frf.json", dir), 0)
+      << Slurp(dir / "stderr.txt");
+  const json frf = Load(dir / "frf.json");
+  ASSERT_EQ(frf["bins"].size(), 2u);
+  EXPECT_EQ(frf["bins"][0]["impacts"].get<int>() + frf["bins"][1]["impacts"].get<int>(), 5);
+  EXPECT_LT(frf["bins"][0]["peak_force_max_n"].get<double>(), frf["bins"][1]["peak_force_min_n"].get<double>());
+  std::string levels;
+  for (int b = 1; b <= 2; ++b) {
+    const std::string n = std::to_string(b);
+    ASSERT_EQ(RunEma("fit " + d + "frf.bin" + n + ".unv -o " + d + "m" + n + ".unv", dir), 0) << Slurp(dir / "stderr.txt");
+    levels += " --level " + std::to_string(frf["bins"][b - 1]["level"].get<double>()) + "=" + d + "m" + n + ".unv";
+  }
+  ASSERT_EQ(RunEma("amplitude" + levels + " --json " + d + "amp.json", dir), 0) << Slurp(dir / "stderr.txt");
+  const json amp = Load(dir / "amp.json");
+  ASSERT_GE(amp["modes"].size(), 5u);  // 810, 900, 2640, 3669, 5969, 6077 Hz, ... found in both bins
+  for (const json& m : amp["modes"]) {
+    EXPECT_EQ(m["frequency_trend"], "none") << m.dump(1);
+    EXPECT_EQ(m["damping_trend"], "none") << m.dump(1);
+  }
+}
+
 }  // namespace
 }  // namespace ema
