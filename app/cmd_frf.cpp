@@ -63,6 +63,7 @@ nlohmann::json SummaryJson(const frf::FrfResult& result) {
 struct ForceBin {
   double lo = 0.0, hi = 0.0;          ///< peak-force limits of the bin, N
   std::vector<double> peaks;          ///< peak forces of its impacts
+  std::vector<double> rms;            ///< RMS force over each impact's contact
   std::set<std::tuple<std::size_t, int, int, int>> impacts;  ///< (file, reference node, dir, impact)
 };
 
@@ -88,14 +89,23 @@ std::vector<ForceBin> MakeForceBins(const std::vector<acquisition::RecordSet>& s
   struct Peak {
     double force;
     std::tuple<std::size_t, int, int, int> key;
+    double rms = 0.0;  ///< over the contact: the samples around the peak above 10 % of it
   };
   std::vector<Peak> peaks;
   for (std::size_t f = 0; f < sets.size(); ++f)
     for (const TimeRecord& r : sets[f].records) {
       if (r.quantity != Quantity::kForce) continue;
       double peak = 0.0;
-      for (double v : r.samples) peak = std::max(peak, std::abs(v));
-      peaks.push_back({peak, {f, r.reference.node, r.reference.direction, r.impact}});
+      std::size_t at = 0;
+      for (std::size_t i = 0; i < r.samples.size(); ++i)
+        if (std::abs(r.samples[i]) > peak) peak = std::abs(r.samples[i]), at = i;
+      std::size_t lo = at, hi = at;
+      while (lo > 0 && std::abs(r.samples[lo - 1]) >= 0.1 * peak) --lo;
+      while (hi + 1 < r.samples.size() && std::abs(r.samples[hi + 1]) >= 0.1 * peak) ++hi;
+      double ss = 0.0;
+      for (std::size_t i = lo; i <= hi; ++i) ss += r.samples[i] * r.samples[i];
+      const double rms = r.samples.empty() ? 0.0 : std::sqrt(ss / static_cast<double>(hi - lo + 1));
+      peaks.push_back({peak, {f, r.reference.node, r.reference.direction, r.impact}, rms});
     }
   if (peaks.empty()) throw InputError(sets.front().name, "no force records (specific data type 13): nothing to bin by force");
   std::sort(peaks.begin(), peaks.end(), [](const Peak& a, const Peak& b) { return a.force < b.force; });
@@ -109,6 +119,7 @@ std::vector<ForceBin> MakeForceBins(const std::vector<acquisition::RecordSet>& s
     for (std::size_t i = 0; i < peaks.size(); ++i) {
       ForceBin& b = bins[i * static_cast<std::size_t>(count) / peaks.size()];
       b.peaks.push_back(peaks[i].force);
+      b.rms.push_back(peaks[i].rms);
       b.impacts.insert(peaks[i].key);
     }
     for (ForceBin& b : bins) b.lo = b.peaks.front(), b.hi = b.peaks.back();
@@ -120,6 +131,7 @@ std::vector<ForceBin> MakeForceBins(const std::vector<acquisition::RecordSet>& s
       for (std::size_t i = 0; i < bins.size() && !placed; ++i)
         if (p.force >= bins[i].lo && (p.force < bins[i].hi || (i + 1 == bins.size() && p.force <= bins[i].hi))) {
           bins[i].peaks.push_back(p.force);
+          bins[i].rms.push_back(p.rms);
           bins[i].impacts.insert(p.key);
           placed = true;
         }
@@ -173,6 +185,7 @@ int RunFrfBins(const std::vector<acquisition::RecordSet>& sets, const frf::FrfOp
                         {"level_kind", "peak_force"},
                         {"level", median},
                         {"peak_force_n", median},
+                        {"rms_force_n", Median(bins[b].rms)},
                         {"peak_force_min_n", *std::min_element(bins[b].peaks.begin(), bins[b].peaks.end())},
                         {"peak_force_max_n", *std::max_element(bins[b].peaks.begin(), bins[b].peaks.end())},
                         {"lower_edge_n", bins[b].lo},

@@ -171,6 +171,8 @@ TEST_F(FrfCli, ForceBinsSplitImpactsByPeakForceIntoOneFrfSetPerBin) {
     // The sampled peak of a 1 ms half-sine at 4096 Hz is within 10 % spread + a few % of the
     // nominal level (the sample misses the crest by up to half a sample).
     EXPECT_NEAR(bin["level"].get<double>(), nominal[b], 0.15 * nominal[b]);
+    // A half-sine's RMS over its contact is peak/√2; sampled with 4 points per pulse: 20 %.
+    EXPECT_NEAR(bin["rms_force_n"].get<double>(), nominal[b] / std::sqrt(2.0), 0.2 * nominal[b] / std::sqrt(2.0));
     const FrfSet set = formats::ReadFrfSet(bin["file"].get<std::string>());
     ASSERT_EQ(set.outputs.size(), 3u);
     const Eigen::VectorXcd truth = acquisition::AnalyticFrf(sys_.truth, {2, 3}, {1, 3}, set.frequency_hz);
