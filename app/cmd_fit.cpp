@@ -175,6 +175,24 @@ int RunFit(const std::vector<std::string>& args) {
   for (const auto& w : fit.warnings) std::cerr << "warning: " << w << "\n";
 
   fit.modes.source = input;
+  if (fit.modes.modes.empty()) {
+    // Never a success without a mode (issue 14): say why, keep the diagram for a look.
+    if (!stab_path.empty())
+      formats::WriteTextFileAtomically(stab_path, StabilisationJson(fit, fit_options.stability).dump(1) + "\n");
+    if (!plot_path.empty()) PlotStabilisation(plot_path, fit.diagram, fit.selected);
+    std::ostringstream why;
+    why << "no mode found";
+    if (fit_options.method == curvefit::FitMethod::kPeak)
+      why << ": no peak of the summed FRF stands " << fit_options.peak.prominence
+          << "x above its valleys with a half-power point in the band";
+    else
+      why << ": no pole is stable over enough orders " << fit.diagram.order_min << ".." << fit.diagram.order_max
+          << " of the stabilisation diagram (" << fit.diagram.frequency_hz.size() << " lines)";
+    why << (fit_options.method == curvefit::FitMethod::kPeak
+                ? "; widen the band"
+                : "; widen the band, raise --order-max, or pick poles with --select F1,F2,...");
+    throw InputError(input, why.str());
+  }
   formats::WriteModeSet(output, fit.modes);
   if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, ModesJson(fit.modes, fit).dump(2) + "\n");
   if (!stab_path.empty())

@@ -211,6 +211,7 @@ json BuildReportData(const ReportInput& input) {
   data["files"] = input.steps;
   data["problems"] = input.problems;
   data["diagnosis"] = input.diagnosis.is_null() ? json::object() : input.diagnosis;
+  if (!input.amplitude.is_null()) data["amplitude"] = input.amplitude;
   json setups = json::array();
   for (const SetupResults& setup : input.setups) {
     const ShapeTable test = ReadShapeTable(setup.test_modes);

@@ -41,6 +41,9 @@ struct ReportInput {
   std::vector<std::string> steps;      ///< the files each step wrote, for the "files" list
   std::vector<SetupResults> setups;
   nlohmann::json diagnosis;            ///< `ema diagnose --json`
+  /// `ema amplitude --json` (cli.md) when the test was run at several force levels: the report
+  /// then plots frequency and damping against level per mode. Null: no such section.
+  nlohmann::json amplitude;
   std::vector<std::string> problems;   ///< steps that failed or were skipped, shown in the page
 };
 

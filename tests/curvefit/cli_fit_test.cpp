@@ -199,4 +199,20 @@ TEST_F(FitOptions, MpcAndMpdMatchAHandComputationFromTheWrittenShapes) {
   }
 }
 
+TEST_F(FitCli, NarrowBandFindsTheModeOrExitsOneNeverZeroWithoutAMode) {
+  // 26 lines around the 52 Hz mode: found (issue 14, narrow-band selection).
+  const fs::path unv = dir_ / "narrow.unv", json = dir_ / "narrow.json";
+  ASSERT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --band 40:65 --json " + json.string()), 0);
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_EQ(j.at("modes").size(), 1u);
+  EXPECT_NEAR(j["modes"][0].at("frequency_hz").get<double>(), 52.0, 0.015 * 52.0);  // as the full-band test
+  // A band between modes (90..100 Hz, 11 lines) holds none: exit 1 and nothing written, for
+  // PolyMAX and for peak picking alike.
+  const fs::path none = dir_ / "none.unv";
+  EXPECT_EQ(RunEma("fit " + sample_ + " -o " + none.string() + " --band 90:100"), 1);
+  EXPECT_EQ(RunEma("fit " + sample_ + " -o " + none.string() + " --band 90:100 --method peak"), 1);
+  EXPECT_FALSE(fs::exists(none));
+}
+
 }  // namespace

@@ -26,7 +26,18 @@ struct FitOptions {
   std::vector<double> select_frequencies_hz;  ///< --select F1,F2,..; empty = automatic
   LsfdOptions lsfd;
   PeakOptions peak;
+  /// Narrow band: with at most this many lines in the band (few lines support few orders),
+  /// automatic selection is also tried with relaxed criteria (SelectPolesNarrowBand), and that
+  /// result is kept when it finds more modes. 0 = never.
+  int narrow_band_max_lines = 100;
 };
+
+/// The narrow-band retry of automatic selection: stability labels recomputed with the damping
+/// criterion relaxed to 20 % and clusters needing 3 orders instead of 4. Empty when the band
+/// holds more than options.narrow_band_max_lines lines or the retry finds nothing; `note`
+/// (optional) gets the warning that says what was relaxed.
+std::vector<SelectedPole> SelectPolesNarrowBand(const StabilisationDiagram& diagram, const FitOptions& options,
+                                                std::string* note = nullptr);
 
 /// Seconds; stage figures are CPU times of the calling thread (see PolymaxTiming).
 struct FitTiming {
