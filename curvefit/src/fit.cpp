@@ -1,8 +1,115 @@
 #include "ema/curvefit/fit.hpp"
 
+#include "ema/core/error.hpp"
+
+#include <Eigen/SVD>
 #include <chrono>
 
 namespace ema::curvefit {
+
+namespace {
+
+// ML refinement of the selected poles (or, for --refine none, only their uncertainty). Updates the
+// poles (and, from the refined residues, the participation vectors) when the refinement is usable.
+bool RefineSelected(const FitData& data, const FitOptions& options, const std::string& source, FitResult* result,
+                    MlRefineResult* ml) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  MlRefineOptions mo = options.ml;
+  mo.estimate_only = options.refine == RefineMethod::kNone;
+  mo.lower_residual = options.lsfd.lower_residual;
+  mo.upper_residual = options.lsfd.upper_residual;
+  try {
+    *ml = RefineModalModel(data, result->selected, mo);
+  } catch (const InputError& e) {
+    result->warnings.push_back(source + ": no ML refinement or uncertainty: " + e.what());
+    return false;
+  }
+  result->refine = ml->summary;
+  result->timing.refine_wall = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (!ml->summary.IsSolutionUsable()) {
+    result->warnings.push_back(source + ": " + ml->summary.BriefReport() + "; PolyMAX poles kept");
+    return ml->summary.final_cost == ml->summary.final_cost;  // sigma at the PolyMAX poles when computed
+  }
+  if (mo.estimate_only) return true;
+  const int m = data.ReferenceCount(), l = data.OutputCount();
+  for (size_t r = 0; r < result->selected.size(); ++r) {
+    Pole& p = result->selected[r].pole;
+    const RefinedPole& rp = ml->poles[r];
+    p.lambda_fitted = rp.lambda_fitted;
+    p.lambda = rp.lambda;
+    p.frequency_hz = rp.frequency_hz;
+    p.damping_ratio = rp.damping_ratio;
+    if (m >= 2) {
+      // R_r = phi l^T over (output, reference): rank-one part by SVD, l = conj(first right vector).
+      Eigen::MatrixXcd rr(l, m);
+      for (int o = 0; o < l; ++o)
+        for (int i = 0; i < m; ++i) rr(o, i) = ml->residues(o * m + i, static_cast<int>(r));
+      Eigen::JacobiSVD<Eigen::MatrixXcd> svd(rr, Eigen::ComputeThinV);
+      if (svd.singularValues()[0] > 0.0) p.participation = svd.matrixV().col(0).conjugate();
+    }
+  }
+  return true;
+}
+
+// Frequency/damping sigma per mode; sigma of |shape| from the residues' sigma at the strongest
+// reference, scaled like the shape (first order; the scaling factor's own uncertainty neglected).
+void AttachUncertainty(const MlRefineResult& ml, LsfdResult& lsfd) {
+  const int n_frf = static_cast<int>(ml.residues.rows());
+  for (size_t r = 0; r < lsfd.modes.modes.size() && r < ml.poles.size(); ++r) {
+    Mode& mode = lsfd.modes.modes[r];
+    mode.frequency_std_hz = ml.poles[r].frequency_std_hz;
+    mode.damping_ratio_std = ml.poles[r].damping_ratio_std;
+    const int m = static_cast<int>(mode.participation.size());
+    const int l = static_cast<int>(mode.shape.size());
+    if (m == 0 || l * m != n_frf) continue;
+    int imax = 0;
+    mode.participation.cwiseAbs().maxCoeff(&imax);
+    double res_norm = 0.0;
+    for (int o = 0; o < l; ++o) res_norm += std::norm(lsfd.residues(o * m + imax, static_cast<int>(r)));
+    res_norm = std::sqrt(res_norm);
+    if (!(res_norm > 0.0)) continue;
+    const double kappa = mode.shape.norm() / res_norm;
+    mode.shape_std.resize(l);
+    for (int o = 0; o < l; ++o) mode.shape_std[o] = kappa * ml.residue_std(o * m + imax, static_cast<int>(r));
+  }
+}
+
+void FillModel(const FitData& data, const std::vector<SelectedPole>& selected, const LsfdResult& lsfd, ModalModel* model) {
+  model->outputs = data.outputs;
+  model->references = data.references;
+  model->transposed = data.transposed;
+  model->frf_type = data.frf_type;
+  model->band_lo_hz = data.frequency_hz.size() ? data.frequency_hz[0] : 0.0;
+  model->band_hi_hz = data.frequency_hz.size() ? data.frequency_hz[data.frequency_hz.size() - 1] : 0.0;
+  model->poles_fitted.clear();
+  for (const auto& s : selected) model->poles_fitted.push_back(s.pole.lambda_fitted);
+  model->residues = lsfd.residues;
+  model->lower_residual = lsfd.lower_residual;
+  model->upper_residual = lsfd.upper_residual;
+}
+
+}  // namespace
+
+Eigen::VectorXcd SynthesiseFrf(const ModalModel& model, int output, int reference, const Eigen::VectorXd& frequency_hz) {
+  const int m = static_cast<int>(model.references.size());
+  const int c = output * m + reference;
+  const int k_pow = model.frf_type == FrfType::kReceptance ? 0 : model.frf_type == FrfType::kMobility ? 1 : 2;
+  Eigen::VectorXcd h(frequency_hz.size());
+  for (Eigen::Index f = 0; f < frequency_hz.size(); ++f) {
+    const std::complex<double> jw(0.0, kTwoPi * frequency_hz[f]);
+    const std::complex<double> fac = std::pow(jw, k_pow);
+    std::complex<double> v = 0.0;
+    for (size_t r = 0; r < model.poles_fitted.size(); ++r) {
+      const std::complex<double> res = model.residues(c, static_cast<int>(r)), lam = model.poles_fitted[r];
+      v += res / (jw - lam) + std::conj(res) / (jw - std::conj(lam));
+    }
+    if (model.lower_residual.size() > c && frequency_hz[f] > 0.0) v += model.lower_residual[c] / (jw * jw);
+    if (model.upper_residual.size() > c) v += model.upper_residual[c];
+    h[f] = fac * v;
+  }
+  return h;
+}
 
 FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& source,
               const ProgressCallback& progress) {
@@ -25,7 +132,13 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
                           : SelectPolesNear(result.diagram, options.select_frequencies_hz);
     const double t2 = ThreadCpuSeconds();
     if (!result.selected.empty()) {
+      MlRefineResult ml;
+      const bool have_ml = RefineSelected(data, options, source, &result, &ml);
+      const double t_lsfd = ThreadCpuSeconds();
       LsfdResult lsfd = EstimateModeShapes(data, result.selected, options.lsfd);
+      result.timing.lsfd = ThreadCpuSeconds() - t_lsfd;
+      if (have_ml) AttachUncertainty(ml, lsfd);
+      FillModel(data, result.selected, lsfd, &result.model);
       result.modes = std::move(lsfd.modes);
       result.synthesis_error = lsfd.synthesis_error;
       for (const auto& w : lsfd.warnings) result.warnings.push_back(source + ": " + w);
@@ -35,7 +148,7 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
     }
     const double t3 = ThreadCpuSeconds();
     result.timing.stabilisation_and_selection = t2 - t1;
-    result.timing.lsfd = t3 - t2;
+    result.timing.refine = t3 - t2 - result.timing.lsfd;
   }
   result.modes.source = source;
   result.timing.total = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -9,6 +9,7 @@
 #include "ema/core/types.hpp"
 #include "ema/curvefit/fit_data.hpp"
 #include "ema/curvefit/lsfd.hpp"
+#include "ema/curvefit/ml_refine.hpp"
 #include "ema/curvefit/peak.hpp"
 #include "ema/curvefit/polymax.hpp"
 #include "ema/curvefit/stabilisation.hpp"
@@ -26,13 +27,36 @@ struct FitOptions {
   std::vector<double> select_frequencies_hz;  ///< --select F1,F2,..; empty = automatic
   LsfdOptions lsfd;
   PeakOptions peak;
+  /// `--refine`: ML refinement of the selected poles (default), or none (PolyMAX/LSFD values kept,
+  /// their sigma still estimated at the PolyMAX poles).
+  RefineMethod refine = RefineMethod::kMl;
+  MlRefineOptions ml;
 };
+
+/// The modal model the fit produced, in the fitting orientation (FitData): FRF column c = o·m + i
+/// is from reference `references[i]` to output `outputs[o]` (swapped back to the measured
+/// orientation by reciprocity when `transposed`). Evaluate with SynthesiseFrf.
+struct ModalModel {
+  std::vector<Dof> outputs;
+  std::vector<Dof> references;
+  bool transposed = false;
+  FrfType frf_type = FrfType::kAccelerance;
+  double band_lo_hz = 0.0, band_hi_hz = 0.0;
+  std::vector<std::complex<double>> poles_fitted;  ///< rad/s as the FRFs carry them (window included)
+  Eigen::MatrixXcd residues;                       ///< (l·m) × N receptance residues (LSFD, phi l^T)
+  Eigen::VectorXd lower_residual, upper_residual;  ///< l·m real residual terms (algorithms.md §1.9)
+};
+
+/// The model's FRF from reference i to output o (FitData indices) at `frequency_hz`.
+Eigen::VectorXcd SynthesiseFrf(const ModalModel& model, int output, int reference, const Eigen::VectorXd& frequency_hz);
 
 /// Seconds; stage figures are CPU times of the calling thread (see PolymaxTiming).
 struct FitTiming {
   PolymaxTiming polymax;
   double stabilisation_and_selection = 0.0;
   double lsfd = 0.0;
+  double refine = 0.0;  ///< ML refinement (CPU of the calling thread; its worker threads not included)
+  double refine_wall = 0.0;
   double total = 0.0;  ///< wall
 };
 
@@ -44,6 +68,8 @@ struct FitResult {
   bool transposed = false;
   std::vector<std::string> warnings;
   FitTiming timing;
+  MlRefineSummary refine;             ///< what the refinement did (termination kFailed when not run)
+  ModalModel model;                   ///< poles, residues and residual terms behind `modes`
 };
 
 /// `source` names the input in messages. Throws InputError for bad input (see PrepareFitData and
