@@ -114,7 +114,7 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
     gram[s] = Eigen::MatrixXd::Zero(cols, cols);
     gram[s].selfadjointView<Eigen::Lower>().rankUpdate(basis[s].transpose());
     gram[s].triangularView<Eigen::StrictlyUpper>() = gram[s].transpose();
-    proj[s].noalias() = basis[s].transpose() * pr.h_real[s];  // cols × n_frf
+    proj[s].resize(cols, pr.n_frf);  // filled per thread block below: basis^T × data
   }
   ev.x.resize(p, pr.n_frf);
   if (want_std) ev.x_std.resize(p, pr.n_frf);
@@ -125,9 +125,14 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
   std::vector<double> cost(threads, 0.0);
   std::vector<int> failed(threads, 0);
   auto work = [&](int t) {
+    // Contiguous FRF block per thread: its share of the data products is one GEMM per segment.
+    const int c0 = static_cast<int>(static_cast<long long>(t) * pr.n_frf / threads);
+    const int c1 = static_cast<int>(static_cast<long long>(t + 1) * pr.n_frf / threads);
+    for (int s = 0; s < S; ++s)
+      proj[s].middleCols(c0, c1 - c0).noalias() = basis[s].transpose() * pr.h_real[s].middleCols(c0, c1 - c0);
     Eigen::MatrixXd gw(cols, cols), m_mix = Eigen::MatrixXd::Zero(2 * nm, 2 * nm);
     Eigen::VectorXd vw(cols);
-    for (int c = t; c < pr.n_frf; c += threads) {
+    for (int c = c0; c < c1; ++c) {
       gw.setZero();
       vw.setZero();
       double hhw = 0.0, hh = 0.0;
@@ -258,6 +263,7 @@ class CompressedVarProCost : public ceres::CostFunction {
 };
 
 struct SolveOutcome {
+  double initial_cost = kNaN;  // sum of squares (2 × Ceres' cost)
   bool ok = false;
   bool converged = false;
   int iterations = 0;
@@ -289,6 +295,7 @@ SolveOutcome SolveWithCeres(const Problem& pr, const MlRefineOptions& options, s
   ceres::Solve(solver, &problem, &summary);
   SolveOutcome out;
   out.iterations = static_cast<int>(summary.iterations.size());
+  out.initial_cost = 2.0 * summary.initial_cost;
   out.message = summary.message;
   out.ok = summary.IsSolutionUsable();
   out.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -480,8 +487,6 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
     residual_weights(first);
     if (!(pr.w.maxCoeff() > 0.0)) pr.w.setOnes();  // noise-free data: plain LS
   }
-  const Evaluation initial = EvaluateModel(pr, lambda0, false);
-  result.summary.initial_cost = initial.cost;
 
   std::vector<cd> lambda = lambda0;
   SolveOutcome outcome;
@@ -492,17 +497,13 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
     outcome = SolveWithCeres(pr, options, &lambda);
   }
   int iterations = outcome.iterations;
+  result.summary.initial_cost = outcome.initial_cost;
   if (outcome.ok && !coherence && !options.estimate_only) {
-    // The residual-based variance is re-estimated at the refined poles and the fit repeated once
-    // (it starts at the optimum, so this costs a few iterations).
+    // The residual-based variance is re-estimated at the refined poles (the PolyMAX poles' misfit
+    // includes their bias) for the covariance below. The weights only shape the estimator's
+    // efficiency, so the fit is not repeated with them.
     const Evaluation mid = EvaluateModel(pr, lambda, false);
-    if (mid.ok) {
-      residual_weights(mid);
-      std::vector<cd> again = lambda;
-      const SolveOutcome second = SolveWithCeres(pr, options, &again);
-      iterations += second.iterations;
-      if (second.ok) lambda = again, outcome.converged = second.converged;
-    }
+    if (mid.ok) residual_weights(mid);
   }
   result.summary.iterations = iterations;
 
@@ -538,6 +539,7 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
   // Final evaluation: residues, their sigma, and the Fisher information of the poles.
   const Evaluation fin = EvaluateModel(pr, lambda, true, true);
   result.summary.final_cost = fin.ok ? fin.cost : kNaN;
+  if (!std::isfinite(result.summary.initial_cost)) result.summary.initial_cost = result.summary.final_cost;
   const double dof = 2.0 * pr.n * n_frf - (static_cast<double>(pr.p) * n_frf + 2.0 * nm);
   result.summary.reduced_chi2 = fin.ok && dof > 0 ? fin.cost / dof : kNaN;
   result.summary.termination = !plausible ? (outcome.ok ? RefineTermination::kRejected : RefineTermination::kFailed)

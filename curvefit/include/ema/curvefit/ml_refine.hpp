@@ -48,8 +48,10 @@ std::string NoiseSourceToString(NoiseSource source);
 
 struct MlRefineOptions {
   int max_iterations = 50;             ///< Levenberg-Marquardt iterations per solve
-  double function_tolerance = 1e-10;   ///< Ceres: relative cost change to stop
-  double parameter_tolerance = 1e-12;  ///< Ceres: relative pole step to stop
+  /// Ceres: relative cost change to stop. The cost is ~ the number of residuals, so 1e-9 is far
+  /// below a change of one unit (a pole moving by a small fraction of its sigma).
+  double function_tolerance = 1e-9;
+  double parameter_tolerance = 1e-10;  ///< Ceres: relative pole step to stop (|lambda| ~ 1e3 rad/s)
   bool lower_residual = true;          ///< real lower residual term per FRF (as LSFD)
   bool upper_residual = true;          ///< real upper residual term per FRF
   /// Use FitData::noise_variance (from coherence) when present; otherwise (or when false) the
