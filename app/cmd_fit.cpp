@@ -103,6 +103,15 @@ nlohmann::json ModesJson(const ModeSet& set, const curvefit::FitResult& fit, cur
     modes.push_back(j);
   }
   nlohmann::json out = {{"modes", modes}, {"synthesis_error", fit.synthesis_error}, {"reciprocity_transposed", fit.transposed}};
+  if (!fit.dropped.empty()) {
+    nlohmann::json dropped = nlohmann::json::array();
+    for (const auto& d : fit.dropped)
+      dropped.push_back({{"frequency_hz", d.frequency_hz},
+                         {"damping_ratio", d.damping_ratio},
+                         {"merged_into_hz", NumberOrNull(d.merged_into_hz)},
+                         {"reason", d.reason}});
+    out["dropped"] = dropped;
+  }
   if (!fit.selected.empty()) {
     out["refinement"] = RefinementJson(fit, refine);
     out["modal_model"] = ModalModelJson(fit.model);

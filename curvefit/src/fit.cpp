@@ -4,6 +4,7 @@
 
 #include <Eigen/SVD>
 #include <chrono>
+#include <sstream>
 
 namespace ema::curvefit {
 
@@ -89,6 +90,50 @@ void FillModel(const FitData& data, const std::vector<SelectedPole>& selected, c
   model->upper_residual = lsfd.upper_residual;
 }
 
+// Two poles whose half-power bands overlap, with the same participation vector (the references
+// excite them alike: m >= 2) but living on different outputs (little overlap of |shape|^2) are one
+// mode measured with different frequencies by different roving sets (sensor mass loading) or
+// records: the weaker (smaller residue energy) is returned for dropping, -1 when there is none.
+int FindSplitPole(const FitData& data, const std::vector<SelectedPole>& selected, const LsfdResult& lsfd,
+                  const SplitPoleOptions& options, DroppedPole* dropped) {
+  const int n = static_cast<int>(selected.size());
+  const int m = data.ReferenceCount();
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      const Pole& pa = selected[a].pole;
+      const Pole& pb = selected[b].pole;
+      if (std::abs(pa.frequency_hz - pb.frequency_hz) >=
+          pa.damping_ratio * pa.frequency_hz + pb.damping_ratio * pb.frequency_hz)
+        continue;  // half-power bands apart: resolvable modes
+      double part_mac = kNaN;
+      if (m >= 2) {
+        part_mac = Mac(pa.participation, pb.participation);
+        if (!(part_mac >= options.participation_mac_min)) continue;
+      }
+      const Eigen::VectorXcd& sa = lsfd.modes.modes[a].shape;
+      const Eigen::VectorXcd& sb = lsfd.modes.modes[b].shape;
+      if (sa.size() != sb.size() || sa.size() == 0 || !(sa.squaredNorm() > 0.0) || !(sb.squaredNorm() > 0.0)) continue;
+      const Eigen::VectorXd ea = sa.cwiseAbs2() / sa.squaredNorm(), eb = sb.cwiseAbs2() / sb.squaredNorm();
+      const double overlap = ea.cwiseMin(eb).sum();
+      if (!(overlap <= options.support_overlap_max)) continue;
+      const double energy_a = lsfd.residues.col(a).squaredNorm(), energy_b = lsfd.residues.col(b).squaredNorm();
+      const int weak = energy_a < energy_b ? a : b, strong = weak == a ? b : a;
+      std::ostringstream why;
+      why.precision(3);
+      why << "same mode as the one at " << selected[strong].pole.frequency_hz << " Hz seen on other outputs ("
+          << (m >= 2 ? "participation MAC " : "") ;
+      if (m >= 2) why << part_mac << ", ";
+      why << "shape overlap " << overlap
+          << "): roving sets or records disagree on its frequency; the mode is fitted as one pole";
+      dropped->frequency_hz = selected[weak].pole.frequency_hz;
+      dropped->damping_ratio = selected[weak].pole.damping_ratio;
+      dropped->merged_into_hz = selected[strong].pole.frequency_hz;
+      dropped->reason = why.str();
+      return weak;
+    }
+  return -1;
+}
+
 }  // namespace
 
 Eigen::VectorXcd SynthesiseFrf(const ModalModel& model, int output, int reference, const Eigen::VectorXd& frequency_hz) {
@@ -132,16 +177,34 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
                           : SelectPolesNear(result.diagram, options.select_frequencies_hz);
     const double t2 = ThreadCpuSeconds();
     if (!result.selected.empty()) {
-      MlRefineResult ml;
-      const bool have_ml = RefineSelected(data, options, source, &result, &ml);
-      const double t_lsfd = ThreadCpuSeconds();
-      LsfdResult lsfd = EstimateModeShapes(data, result.selected, options.lsfd);
-      result.timing.lsfd = ThreadCpuSeconds() - t_lsfd;
-      if (have_ml) AttachUncertainty(ml, lsfd);
-      FillModel(data, result.selected, lsfd, &result.model);
-      result.modes = std::move(lsfd.modes);
-      result.synthesis_error = lsfd.synthesis_error;
-      for (const auto& w : lsfd.warnings) result.warnings.push_back(source + ": " + w);
+      for (;;) {
+        const size_t warnings_before = result.warnings.size();
+        MlRefineResult ml;
+        const bool have_ml = RefineSelected(data, options, source, &result, &ml);
+        const double t_lsfd = ThreadCpuSeconds();
+        LsfdResult lsfd = EstimateModeShapes(data, result.selected, options.lsfd);
+        result.timing.lsfd += ThreadCpuSeconds() - t_lsfd;
+        // Automatic selection only: a pole that is the same mode as a neighbour seen on other
+        // outputs (roving-set inconsistency) is dropped and the model fitted again without it.
+        if (options.select_frequencies_hz.empty() && options.split_poles.enabled) {
+          DroppedPole dropped;
+          const int drop = FindSplitPole(data, result.selected, lsfd, options.split_poles, &dropped);
+          if (drop >= 0) {
+            result.warnings.resize(warnings_before);  // this round's refinement messages are moot
+            result.dropped.push_back(dropped);
+            result.warnings.push_back(source + ": pole at " + std::to_string(dropped.frequency_hz) + " Hz dropped: " +
+                                      dropped.reason);
+            result.selected.erase(result.selected.begin() + drop);
+            continue;
+          }
+        }
+        if (have_ml) AttachUncertainty(ml, lsfd);
+        FillModel(data, result.selected, lsfd, &result.model);
+        result.modes = std::move(lsfd.modes);
+        result.synthesis_error = lsfd.synthesis_error;
+        for (const auto& w : lsfd.warnings) result.warnings.push_back(source + ": " + w);
+        break;
+      }
     } else {
       result.modes.dofs = data.outputs;
       result.warnings.push_back(source + ": no stable poles found; no modes selected");

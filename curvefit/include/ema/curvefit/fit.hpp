@@ -18,6 +18,25 @@ namespace ema::curvefit {
 
 enum class FitMethod { kPolymax, kPeak };
 
+/// Automatic selection's check for one mode fitted as two poles (roving-set inconsistency).
+struct SplitPoleOptions {
+  bool enabled = true;
+  /// Two poles with overlapping half-power bands whose participation vectors (m >= 2) have at
+  /// least this MAC are excited alike by the references...
+  double participation_mac_min = 0.9;
+  /// ...and whose |shape|^2 distributions (each summing to 1) share at most this much
+  /// (sum over outputs of the smaller share) live on different outputs: one mode, two poles.
+  double support_overlap_max = 0.35;
+};
+
+/// A pole automatic selection picked and then dropped, with the reason (MODES.json "dropped").
+struct DroppedPole {
+  double frequency_hz = 0.0;
+  double damping_ratio = 0.0;
+  double merged_into_hz = kNaN;  ///< the kept pole it duplicated
+  std::string reason;
+};
+
 struct FitOptions {
   FitMethod method = FitMethod::kPolymax;
   FitDataOptions data;              ///< band, NaN handling, reciprocity
@@ -31,6 +50,7 @@ struct FitOptions {
   /// their sigma still estimated at the PolyMAX poles).
   RefineMethod refine = RefineMethod::kMl;
   MlRefineOptions ml;
+  SplitPoleOptions split_poles;  ///< automatic selection only
 };
 
 /// The modal model the fit produced, in the fitting orientation (FitData): FRF column c = o·m + i
@@ -70,6 +90,7 @@ struct FitResult {
   FitTiming timing;
   MlRefineSummary refine;             ///< what the refinement did (termination kFailed when not run)
   ModalModel model;                   ///< poles, residues and residual terms behind `modes`
+  std::vector<DroppedPole> dropped;   ///< selected poles dropped as duplicates of a kept mode
 };
 
 /// `source` names the input in messages. Throws InputError for bad input (see PrepareFitData and
