@@ -51,7 +51,7 @@ std::vector<int> DisplayLines(const FrfSet& frfs, double lo, double hi) {
   return lines;
 }
 
-json FrfData(const SetupResults& setup, const ShapeTable& test) {
+json FrfData(const SetupResults& setup) {
   json out = json::object();
   if (!setup.frfs || setup.frfs->LineCount() == 0) return out;
   const FrfSet& frfs = *setup.frfs;
@@ -59,24 +59,17 @@ json FrfData(const SetupResults& setup, const ShapeTable& test) {
   Eigen::VectorXd f(static_cast<int>(lines.size()));
   for (int i = 0; i < f.size(); ++i) f[i] = frfs.frequency_hz[lines[i]];
   out["frequency_hz"] = Rounded(f);
-  std::vector<std::complex<double>> poles;
-  for (size_t m = 0; m < test.frequency_hz.size(); ++m)
-    if (std::isfinite(test.frequency_hz[m]))
-      poles.push_back(FrequencyAndDampingToPole(test.frequency_hz[m],
-                                                std::isfinite(test.damping_ratio[m]) ? test.damping_ratio[m] : 0.01));
-  double lo = setup.band_lo_hz, hi = setup.band_hi_hz;
-  if (hi <= lo) {
-    lo = frfs.frequency_hz.minCoeff();
-    hi = frfs.frequency_hz.maxCoeff();
-  }
+  // The fit's own modal model (MODES.json "modal_model": refined poles, residues, residual terms).
+  const json model = setup.test_modes.is_object() && setup.test_modes.contains("modal_model")
+                         ? setup.test_modes["modal_model"]
+                         : json();
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(f.size());
   json list = json::array();
   for (int r = 0; r < frfs.ReferenceCount(); ++r) {
     for (int o = 0; o < frfs.OutputCount(); ++o) {
       const Eigen::VectorXcd h = frfs.h[r].col(o);
       if (!h.allFinite() && !(h.array() == h.array()).any()) continue;  // not measured
-      const Eigen::VectorXcd fit = poles.empty() ? Eigen::VectorXcd::Constant(h.size(), {kNaN, kNaN})
-                                                 : SynthesiseFrf(frfs.frequency_hz, h, poles, lo, hi);
+      const Eigen::VectorXcd fit = SynthesiseFromModalModel(model, frfs.outputs[o], frfs.references[r], frfs.frequency_hz);
       Eigen::VectorXd mag(f.size()), phase(f.size()), fit_mag(f.size()), fit_phase(f.size());
       for (int i = 0; i < f.size(); ++i) {
         const std::complex<double> v = h[lines[i]], w = fit[lines[i]];
@@ -105,17 +98,21 @@ json FrfData(const SetupResults& setup, const ShapeTable& test) {
   return out;
 }
 
-json MacData(const ShapeTable& test, const json& model_json) {
+// The MAC matrix of the correlation step (CORR.json "mac", test modes as rows), not recomputed here.
+json MacData(const ShapeTable& test, const json& model_json, const json& correlation) {
   const ShapeTable model = ReadShapeTable(model_json);
-  int shared = 0;
-  const Eigen::MatrixXd mac = MacMatrix(test, model, &shared);
-  if (mac.size() == 0) return json::object();
+  if (!correlation.is_object() || !correlation.contains("mac") || !correlation["mac"].is_array()) return json::object();
   json values = json::array();
-  for (int i = 0; i < mac.rows(); ++i) {
+  for (const json& row_in : correlation["mac"]) {
     json row = json::array();
-    for (int j = 0; j < mac.cols(); ++j) row.push_back(Round(mac(i, j)));
+    if (row_in.is_array())
+      for (const json& v : row_in) row.push_back(v.is_number() ? json(Round(v.get<double>())) : json(nullptr));
     values.push_back(std::move(row));
   }
+  int shared = 0;
+  if (correlation.contains("summary") && correlation["summary"].is_object() &&
+      correlation["summary"].contains("shared_dofs") && correlation["summary"]["shared_dofs"].is_number_integer())
+    shared = correlation["summary"]["shared_dofs"].get<int>();
   auto labels = [](const ShapeTable& t, const char* prefix) {
     json out = json::array();
     for (size_t m = 0; m < t.frequency_hz.size(); ++m) {
@@ -220,9 +217,9 @@ json BuildReportData(const ReportInput& input) {
     json selected = json::array();
     for (double f : test.frequency_hz) selected.push_back(Round(f));
     s["selected_hz"] = selected;
-    s["frf"] = FrfData(setup, test);
-    s["mac_before"] = MacData(test, setup.model_modes_before);
-    s["mac_after"] = MacData(test, setup.model_modes_after);
+    s["frf"] = FrfData(setup);
+    s["mac_before"] = MacData(test, setup.model_modes_before, setup.correlation_before);
+    s["mac_after"] = MacData(test, setup.model_modes_after, setup.correlation_after);
     s["correlation_before"] = setup.correlation_before.is_null() ? json::object() : setup.correlation_before;
     s["correlation_after"] = setup.correlation_after.is_null() ? json::object() : setup.correlation_after;
     s["shapes"] = ModeData(test, setup);
