@@ -102,7 +102,11 @@ void BuildBasis(const Problem& pr, const std::vector<cd>& lambda, bool want_b, s
   }
 }
 
-Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool want_jacobian, bool want_std = false) {
+// `reweight` (one segment only): each FRF's weight is replaced by the one its own residual at these
+// poles gives (2/var, var = sse/(n - p/2)); with one segment the solution x does not depend on
+// the FRF's weight, so this is exact in a single pass.
+Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool want_jacobian, bool want_std = false,
+                         bool reweight = false) {
   Evaluation ev;
   const int nm = pr.n_modes, p = pr.p, S = pr.Segments();
   const int cols = p + (want_jacobian ? 2 * nm : 0);
@@ -149,14 +153,8 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
         continue;
       }
       const Eigen::VectorXd xs = llt.solve(vw.head(p));
-      cost[t] += std::max(0.0, hhw - xs.dot(vw.head(p)));
       ev.x.col(c) = scale.cwiseProduct(xs);
-      if (want_std) {
-        const Eigen::MatrixXd inv = llt.solve(Eigen::MatrixXd::Identity(p, p));
-        ev.x_std.col(c) = scale.cwiseProduct(inv.diagonal().cwiseMax(0.0).cwiseSqrt());
-      }
-      // Unweighted residual energy (for the residual-based noise estimate): with constant
-      // weights per FRF it is the weighted one divided by the weight.
+      // Unweighted residual energy (for the residual-based noise estimate).
       {
         Eigen::MatrixXd g0 = Eigen::MatrixXd::Zero(p, p);
         Eigen::VectorXd v0 = Eigen::VectorXd::Zero(p);
@@ -165,6 +163,14 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
           v0 += proj[s].col(c).head(p);
         }
         ev.frf_sse[c] = std::max(0.0, hh - 2.0 * xs.dot(v0) + xs.dot(g0 * xs));
+      }
+      double factor = 1.0;  // new weight / weight used above
+      if (reweight && S == 1 && ev.frf_sse[c] > 0.0 && pr.w(0, c) > 0.0)
+        factor = 2.0 * std::max(1.0, pr.n - 0.5 * p) / ev.frf_sse[c] / pr.w(0, c);
+      cost[t] += factor * std::max(0.0, hhw - xs.dot(vw.head(p)));
+      if (want_std) {
+        const Eigen::MatrixXd inv = llt.solve(Eigen::MatrixXd::Identity(p, p));
+        ev.x_std.col(c) = scale.cwiseProduct(inv.diagonal().cwiseMax(0.0).cwiseSqrt()) / std::sqrt(factor);
       }
       if (!want_jacobian) continue;
       const Eigen::VectorXd& x = ev.x.col(c);
@@ -178,9 +184,9 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
       }
       const Eigen::MatrixXd gab_m = gw.block(0, p, p, 2 * nm) * m_mix;  // <A, d>
       const Eigen::MatrixXd dd = m_mix.transpose() * gw.block(p, p, 2 * nm, 2 * nm) * m_mix;
-      jtj[t].noalias() += dd - gab_m.transpose() * llt.solve(gab_m);
+      jtj[t].noalias() += factor * (dd - gab_m.transpose() * llt.solve(gab_m));
       const Eigen::VectorXd de = vw.tail(2 * nm) - gw.block(p, 0, 2 * nm, p) * xs;  // <B, e>
-      jtr[t].noalias() -= m_mix.transpose() * de;
+      jtr[t].noalias() -= factor * (m_mix.transpose() * de);
     }
   };
   if (threads == 1) {
@@ -264,6 +270,7 @@ class CompressedVarProCost : public ceres::CostFunction {
 
 struct SolveOutcome {
   double initial_cost = kNaN;  // sum of squares (2 × Ceres' cost)
+  double final_cost = kNaN;
   bool ok = false;
   bool converged = false;
   int iterations = 0;
@@ -296,6 +303,7 @@ SolveOutcome SolveWithCeres(const Problem& pr, const MlRefineOptions& options, s
   SolveOutcome out;
   out.iterations = static_cast<int>(summary.iterations.size());
   out.initial_cost = 2.0 * summary.initial_cost;
+  out.final_cost = 2.0 * summary.final_cost;
   out.message = summary.message;
   out.ok = summary.IsSolutionUsable();
   out.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -498,13 +506,10 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
   }
   int iterations = outcome.iterations;
   result.summary.initial_cost = outcome.initial_cost;
-  if (outcome.ok && !coherence && !options.estimate_only) {
-    // The residual-based variance is re-estimated at the refined poles (the PolyMAX poles' misfit
-    // includes their bias) for the covariance below. The weights only shape the estimator's
-    // efficiency, so the fit is not repeated with them.
-    const Evaluation mid = EvaluateModel(pr, lambda, false);
-    if (mid.ok) residual_weights(mid);
-  }
+  // The residual-based variance is re-estimated at the refined poles (the PolyMAX poles' misfit
+  // includes their bias) for the covariance: the final evaluation reweights. The weights only shape
+  // the estimator's efficiency, so the fit is not repeated with them.
+  const bool reweight = outcome.ok && !coherence && !options.estimate_only;
   result.summary.iterations = iterations;
 
   // Plausibility: every pole stable, 0 < zeta < 1, and not moved by more than a few half-power
@@ -525,9 +530,8 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
     }
   }
   if (plausible && coherence && !options.estimate_only) {
-    const Evaluation at = EvaluateModel(pr, lambda, false);
     const double dof_ = 2.0 * pr.n * n_frf - (static_cast<double>(pr.p) * n_frf + 2.0 * nm);
-    const double chi2 = at.ok && dof_ > 0 ? at.cost / dof_ : kNaN;
+    const double chi2 = dof_ > 0 ? outcome.final_cost / dof_ : kNaN;
     if (!(chi2 <= options.max_reduced_chi2)) {
       plausible = false;
       reason << "misfit " << chi2 << " times the coherence noise level (above " << options.max_reduced_chi2
@@ -537,7 +541,7 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
   if (!plausible) lambda = lambda0;
 
   // Final evaluation: residues, their sigma, and the Fisher information of the poles.
-  const Evaluation fin = EvaluateModel(pr, lambda, true, true);
+  const Evaluation fin = EvaluateModel(pr, lambda, true, true, reweight && plausible);
   result.summary.final_cost = fin.ok ? fin.cost : kNaN;
   if (!std::isfinite(result.summary.initial_cost)) result.summary.initial_cost = result.summary.final_cost;
   const double dof = 2.0 * pr.n * n_frf - (static_cast<double>(pr.p) * n_frf + 2.0 * nm);
