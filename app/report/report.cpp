@@ -167,6 +167,27 @@ json ModeData(const ShapeTable& test, const SetupResults& setup) {
   return out;
 }
 
+// The fitted test modes with their 1-sigma (MODES.json frequency_std_hz, damping_ratio_std) and
+// the poles the fit dropped, for the report's mode table. Values as ema fit wrote them.
+json TestModeTable(const json& test_modes) {
+  json out = json::object();
+  if (!test_modes.is_object() || !test_modes.contains("modes") || !test_modes["modes"].is_array()) return out;
+  auto number = [](const json& j, const char* key) -> json {
+    return j.is_object() && j.contains(key) && j[key].is_number() ? json(j[key].get<double>()) : json(nullptr);
+  };
+  json rows = json::array();
+  for (const json& m : test_modes["modes"])
+    rows.push_back({{"frequency_hz", number(m, "frequency_hz")},
+                    {"frequency_std_hz", number(m, "frequency_std_hz")},
+                    {"damping_ratio", number(m, "damping_ratio")},
+                    {"damping_ratio_std", number(m, "damping_ratio_std")},
+                    {"mpc", number(m, "mpc")}});
+  out["modes"] = rows;
+  if (test_modes.contains("refinement")) out["refinement"] = test_modes["refinement"];
+  if (test_modes.contains("dropped")) out["dropped"] = test_modes["dropped"];
+  return out;
+}
+
 json StabilisationData(const SetupResults& setup) {
   const StabilisationPoints points = ReadStabilisation(setup.stabilisation);
   if (points.order.empty()) return json::object();
@@ -223,6 +244,7 @@ json BuildReportData(const ReportInput& input) {
     s["correlation_before"] = setup.correlation_before.is_null() ? json::object() : setup.correlation_before;
     s["correlation_after"] = setup.correlation_after.is_null() ? json::object() : setup.correlation_after;
     s["shapes"] = ModeData(test, setup);
+    s["test_mode_table"] = TestModeTable(setup.test_modes);
     json rejected = json::array();
     if (setup.frf_summary.is_object() && setup.frf_summary.contains("frfs") && setup.frf_summary["frfs"].is_array()) {
       for (const json& frf : setup.frf_summary["frfs"]) {

@@ -212,6 +212,8 @@ TEST(Report, PageIsSelfContainedAndCarriesTheData) {
   for (const json& v : data["setups"][0]["frf"]["frfs"][0]["fit_magnitude"]) finite += v.is_number();
   EXPECT_GT(finite, 100);
   EXPECT_EQ(data["setups"][0]["shapes"]["modes"].size(), 3u);
+  ASSERT_EQ(data["setups"][0]["test_mode_table"]["modes"].size(), 3u);
+  EXPECT_EQ(data["setups"][0]["test_mode_table"]["modes"][1]["frequency_hz"], 185.0);
   EXPECT_EQ(data["setups"][0]["rejected"].size(), 1u);
 }
 
