@@ -4,6 +4,7 @@
 
 #include <Eigen/SVD>
 #include <chrono>
+#include <cmath>
 #include <sstream>
 
 namespace ema::curvefit {
@@ -30,7 +31,7 @@ bool RefineSelected(const FitData& data, const FitOptions& options, const std::s
   result->timing.refine_wall = std::chrono::duration<double>(Clock::now() - t0).count();
   if (!ml->summary.IsSolutionUsable()) {
     result->warnings.push_back(source + ": " + ml->summary.BriefReport() + "; PolyMAX poles kept");
-    return ml->summary.final_cost == ml->summary.final_cost;  // sigma at the PolyMAX poles when computed
+    return std::isfinite(ml->summary.final_cost);  // sigma at the PolyMAX poles when computed
   }
   if (mo.estimate_only) return true;
   const int m = data.ReferenceCount(), l = data.OutputCount();
