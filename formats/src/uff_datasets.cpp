@@ -1045,6 +1045,7 @@ void Reader::Impl::ReadBinary58(std::string_view id_line, std::int64_t id_line_n
 
 Reader::Reader(const std::filesystem::path& path, ReadOptions options) : impl_(std::make_unique<Impl>(path, options)) {
   if (options.parallel_min_bytes > 0 && !options.headers_only && impl_->in.Size() >= options.parallel_min_bytes &&
+      impl_->in.Size() <= options.parallel_max_bytes &&
       std::thread::hardware_concurrency() >= 2)
     impl_->StartSecondHalf(path);
 }

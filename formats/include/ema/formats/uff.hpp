@@ -174,6 +174,9 @@ struct ReadOptions {
   /// near the middle, verified against the sequential parse; results, notes and errors are exactly
   /// those of a one-thread read). 0 = always one thread. Not used with headers_only.
   std::uint64_t parallel_min_bytes = std::uint64_t{32} << 20;
+  /// ...and at most this big: the worker holds the second half in memory until it is handed out,
+  /// so a bigger file is streamed on one thread (bounded memory).
+  std::uint64_t parallel_max_bytes = std::uint64_t{2} << 30;
 };
 
 /// Streaming dataset reader. Throws ema::InputError("file:line: dataset N record R: ...").
