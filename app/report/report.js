@@ -206,6 +206,28 @@
         ((c.unpaired_model || []).length) }));
     });
 
+    // Test modes with their 1-sigma from the fit (ema fit's ML refinement).
+    var tm = setup.test_mode_table || {};
+    var tms = section(wrap, 'Test modes — ' + setup.name,
+      'Fitted modes, f ± σ and ζ ± σ: 1σ of the estimate from the data\'s own noise (Fisher information of the ' +
+      'maximum-likelihood fit).' + (tm.refinement ? ' Refinement: ' + tm.refinement.termination + ', noise from ' +
+      tm.refinement.noise_source + '.' : ''));
+    if (tm.modes && tm.modes.length) {
+      var pm = function (v, s, scale, digits) {
+        return fmt(v === null ? v : scale * v, digits) + (s === null || s === undefined ? '' : ' ± ' +
+          Number(scale * s).toPrecision(2));
+      };
+      table(tms, ['mode', 'f ± σ (Hz)', 'ζ ± σ (%)', 'MPC'], tm.modes.map(function (m, i) {
+        return [i + 1, pm(m.frequency_hz, m.frequency_std_hz, 1, 3), pm(m.damping_ratio, m.damping_ratio_std, 100, 3),
+          fmt(m.mpc, 3)];
+      }));
+      (tm.dropped || []).forEach(function (d) {
+        tms.appendChild(el('p', { 'class': 'note', text: 'Pole at ' + fmt(d.frequency_hz, 2) + ' Hz dropped: ' + d.reason }));
+      });
+    } else {
+      unavailable(tms, 'Test modes');
+    }
+
     // Animated mode shapes on the test geometry.
     var ms = section(wrap, 'Mode shapes — ' + setup.name,
       'Test mode shapes animated on the test geometry (real part of the shape × cos ωt + imaginary part × sin ωt). ' +

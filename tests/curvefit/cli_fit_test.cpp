@@ -52,7 +52,15 @@ TEST_F(FitCli, MeasuredBeamWritesEveryOutput) {
     ASSERT_EQ(m.at("shape").size(), 3u);
     EXPECT_EQ(m["shape"][0].at("dir").get<std::string>(), "+X");
     EXPECT_EQ(m["shape"][0].at("value").size(), 2u);
+    // cli.md "Uncertainty": 1 sigma from the data's noise, small against the value (the beam's
+    // FRFs are clean: sigma_f well below 0.1 % of f).
+    ASSERT_TRUE(m.at("frequency_std_hz").is_number());
+    ASSERT_TRUE(m.at("damping_ratio_std").is_number());
+    EXPECT_GT(m["frequency_std_hz"].get<double>(), 0.0);
+    EXPECT_LT(m["frequency_std_hz"].get<double>(), 1e-3 * expected[r]);
   }
+  EXPECT_EQ(j.at("refinement").at("method"), "ml");
+  EXPECT_EQ(j.at("modal_model").at("frfs").size(), 3u);  // 3 hammer points x 1 sensor
   std::ifstream sin(stab);
   const nlohmann::json s = nlohmann::json::parse(sin);
   EXPECT_EQ(s.at("orders").size(), 120u);  // default: 120 orders for one reference
@@ -96,6 +104,7 @@ TEST_F(FitCli, BadInputAndUsage) {
   EXPECT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --band 10"), 2);
   EXPECT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --plot x.pdf"), 2);
   EXPECT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --method lscf"), 2);
+  EXPECT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --refine maybe"), 2);
   EXPECT_EQ(RunEma("fit " + sample_), 2);  // -o missing
 }
 
