@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "ema/correlation/diagnose.hpp"
+#include "ema/diagnose/diagnose.hpp"
 #include "ema/model/effects.hpp"
 #include "ema/model/solve.hpp"
 
@@ -86,9 +86,9 @@ void BM_Diagnose3Bodies20Springs12Modes(benchmark::State& state) {
     for (Eigen::Index i = 0; i < mode.shape.size(); ++i)
       mode.shape(i) += 0.01 * rms * std::complex<double>(g(rng), g(rng));
   }
-  correlation::Diagnosis d;
+  diagnose::Diagnosis d;
   for (auto _ : state) {
-    d = correlation::Diagnose(nominal, {{"", test}});
+    d = diagnose::Diagnose(nominal, {{"", test}});
     benchmark::DoNotOptimize(d);
   }
   int singles = 0;

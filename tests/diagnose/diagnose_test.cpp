@@ -18,7 +18,6 @@
 #include "ema/model/solve.hpp"
 
 namespace ema::diagnose {
-void Dump(const Diagnosis& d, int n = 20);
 namespace {
 
 using model::Anchor;
