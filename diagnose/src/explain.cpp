@@ -31,6 +31,19 @@ std::string Where(const std::string& target) {
   return "group '" + target + "'";
 }
 
+// True when one candidate's effects (kind and target) all appear in the other's.
+bool Nested(const Candidate& a, const Candidate& b) {
+  auto contains = [](const Candidate& big, const Candidate& small) {
+    for (const auto& e : small.effects) {
+      bool found = false;
+      for (const auto& f : big.effects) found |= e.kind == f.kind && e.target == f.target;
+      if (!found) return false;
+    }
+    return true;
+  };
+  return contains(a, b) || contains(b, a);
+}
+
 }  // namespace
 
 std::string FormatNumber(double v, int significant) {
@@ -128,6 +141,8 @@ void Rank(std::vector<Candidate>* all, const Candidate& none) {
     for (int b = 0; b < top; ++b) {
       const Candidate& cb = (*all)[b];
       if (a == b || cb.kind == "none" || !cb.error.empty()) continue;
+      // A set and its own extension (one more effect at a neutral value) are not rival readings.
+      if (Nested(ca, cb)) continue;
       const Eigen::VectorXd db = cb.residuals - none.residuals;
       const double na = da.norm(), nb = db.norm();
       if (na <= 0.0 || nb <= 0.0) continue;

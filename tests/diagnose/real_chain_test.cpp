@@ -18,6 +18,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "diagnose/chain_helpers.hpp"
+
+namespace ema {
 namespace {
 
 namespace fs = std::filesystem;
@@ -26,89 +29,14 @@ using nlohmann::json;
 // One folder per process: ctest runs the tests of this file in parallel and they share file names.
 const fs::path kTmp = fs::path(EMA_TEST_TMP_DIR) / ("diagnose_real_chain-" + std::to_string(getpid()));
 
-bool HaveExecutable() { return fs::exists(EMA_EXECUTABLE); }
+using test_chain::HaveExecutable;
+using test_chain::Slurp;
+using test_chain::Vec;
+using test_chain::Write;
 
-int RunEma(const std::string& args, const std::string& log) {
-  const std::string cmd = std::string("\"") + EMA_EXECUTABLE + "\" " + args + " > \"" + (kTmp / log).string() +
-                          "\" 2>&1";
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+int RunEma(const std::string& args, const std::string& log) { return test_chain::RunEma(kTmp, args, log); }
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void Write(const fs::path& p, const std::string& text) {
-  std::ofstream(p) << text;
-}
-
-std::string Vec(double x, double y, double z) {
-  std::ostringstream s;
-  s << "[" << x << ", " << y << ", " << z << "]";
-  return s.str();
-}
-
-// Air-film load-lift table of one pad: exponential (vertical) or inverse-square (lateral).
-std::string FilmArrays(bool exponential) {
-  std::ostringstream gap, load;
-  for (int i = 0; i <= 80; ++i) {
-    const double h = (0.5 + 0.75 * i) * 1e-6;
-    gap << (i ? ", " : "") << h;
-    load << (i ? ", " : "") << (exponential ? 300.0 * std::exp(-h / 6e-6) : 80.0 * std::pow(5e-6 / h, 2.0));
-  }
-  return "gap = [" + gap.str() + "], load = [" + load.str() + "]";
-}
-
-std::string ModelToml(const std::string& lateral_group = "bearings") {
-  std::ostringstream m;
-  m.precision(10);
-  m << "[model]\nname = \"two-body guideway (test)\"\n\n"
-    << "[[body]]\nname = \"carriage\"\nmass = 2.88\ninertia = [0.0117763, 0.0151621, 0.0104617]\ncentre = [0.0, 0.0, 0.0]\n\n"
-    << "[[body]]\nname = \"base\"\nmass = 12.0\ninertia = [0.08, 0.10, 0.15]\ncentre = [0.0, 0.0, -0.08]\n\n"
-    << "[damping]\nratio = 0.01\n\n";
-  int n = 0;
-  const std::string vertical = FilmArrays(true), lateral = FilmArrays(false);
-  for (double x : {-0.06, 0.06})
-    for (double y : {-0.03, 0.03})
-      m << "[[spring]]\nname = \"V" << ++n << "\"\ngroup = \"bearings\"\na = { body = \"carriage\", at = "
-        << Vec(x, y, -0.03) << " }\nb = { body = \"base\" }\ndirection = [0, 0, 1]\n"
-        << "law = { series = { setting = 5.0e-6, elements = [ { air_film = { " << vertical << " } } ] } }\n\n";
-  for (double x : {-0.06, 0.06})
-    for (double y : {-0.045, 0.045})
-      m << "[[spring]]\nname = \"L" << ++n << "\"\ngroup = \"" << lateral_group
-        << "\"\na = { body = \"carriage\", at = " << Vec(x, y, 0.0) << " }\nb = { body = \"base\" }\ndirection = "
-        << Vec(0, y > 0 ? -1.0 : 1.0, 0) << "\n"
-        << "law = { series = { setting = 5.0e-6, elements = [ { air_film = { " << lateral << " } } ] } }\n\n";
-  m << "[[spring]]\nname = \"drive\"\ngroup = \"drive\"\na = { body = \"carriage\", at = [0, 0, 0] }\n"
-       "b = { body = \"base\" }\ndirection = [1, 0, 0]\nlaw = { linear = { k = 3.0e6 } }\n\n";
-  for (double x : {-0.1, 0.1})
-    for (double y : {-0.08, 0.08}) {
-      const std::string at = Vec(x, y, -0.1);
-      ++n;
-      m << "[[spring]]\nname = \"MZ" << n << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = " << at
-        << " }\nb = { body = \"ground\" }\ndirection = [0, 0, 1]\nlaw = { linear = { k = 8.0e6 } }\n\n"
-        << "[[spring]]\nname = \"MX" << n << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = " << at
-        << " }\nb = { body = \"ground\" }\ndirection = [1, 0, 0]\nlaw = { linear = { k = " << (x > 0 ? 3.0e6 : 2.0e6)
-        << " } }\n\n"
-        << "[[spring]]\nname = \"MY" << n << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = " << at
-        << " }\nb = { body = \"ground\" }\ndirection = [0, 1, 0]\nlaw = { linear = { k = 3.0e6 } }\n\n";
-    }
-  int id = 101;
-  for (double x : {-0.06, 0.06})
-    for (double y : {-0.03, 0.03})
-      m << "[[point]]\nid = " << id++ << "\nbody = \"carriage\"\nat = " << Vec(x, y, 0.03) << "\n\n";
-  id = 201;
-  for (double x : {-0.1, 0.1})
-    for (double y : {-0.08, 0.08})
-      m << "[[point]]\nid = " << id++ << "\nbody = \"base\"\nat = " << Vec(x, y, -0.06) << "\n\n";
-  m << "[[setup]]\nname = \"stud-5um\"\noperating = { bearings = 5.0e-6 }\n\n"
-    << "[[setup]]\nname = \"stud-9um\"\noperating = { bearings = 9.0e-6 }\n";
-  return m.str();
-}
+using test_chain::ModelToml;
 
 std::string PlanToml(unsigned seed) {
   std::ostringstream p;
@@ -320,3 +248,4 @@ TEST_F(RealChain, BadInputExitsOne) {
 }
 
 }  // namespace
+}  // namespace ema
