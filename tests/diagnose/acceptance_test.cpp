@@ -27,52 +27,13 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using test_chain::Slurp;
+using test_chain::StackToml;
+using test_chain::WriteBeam;
 using test_chain::Vec;
 using test_chain::Write;
 
 // One folder per process: ctest runs these tests in parallel.
 const fs::path kTmp = fs::path(EMA_TEST_TMP_DIR) / ("diagnose_acceptance-" + std::to_string(getpid()));
-
-// ---- the two-body stack ----
-
-std::string StackToml() {
-  std::ostringstream m;
-  m.precision(10);
-  m << "[model]\nname = \"two-body stack on bolted joints and mounts\"\n\n"
-    << "[[body]]\nname = \"top\"\nmass = 5.0\ninertia = [0.02, 0.03, 0.045]\ncentre = [0.01, 0.005, 0.05]\n"
-    << "uncertainty = 0.02  # weighed\n\n"
-    << "[[body]]\nname = \"base\"\nmass = 12.0\ninertia = [0.08, 0.10, 0.15]\ncentre = [0.0, 0.0, -0.05]\n"
-    << "uncertainty = 0.02\n\n[damping]\nratio = 0.01\n\n";
-  int j = 0;
-  for (double x : {-0.08, 0.08})
-    for (double y : {-0.06, 0.06}) {
-      ++j;
-      const double k[] = {8e6 + 2e6 * (x > 0), 6e6, 2.5e7};
-      const char* axis[] = {"X", "Y", "Z"};
-      for (int d = 0; d < 3; ++d)
-        m << "[[spring]]\nname = \"J" << j << axis[d] << "\"\ngroup = \"joints\"\na = { body = \"top\", at = "
-          << Vec(x, y, 0.0) << " }\nb = { body = \"base\" }\ndirection = "
-          << Vec(d == 0 ? 1 : 0, d == 1 ? 1 : 0, d == 2 ? 1 : 0) << "\nlaw = { linear = { k = " << k[d] << " } }\n\n";
-    }
-  j = 0;
-  for (double x : {-0.1, 0.1})
-    for (double y : {-0.08, 0.08}) {
-      ++j;
-      const double k[] = {3e6 - 1e6 * (y > 0), 2.5e6, 8e6};
-      const char* axis[] = {"X", "Y", "Z"};
-      for (int d = 0; d < 3; ++d)
-        m << "[[spring]]\nname = \"M" << j << axis[d] << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = "
-          << Vec(x, y, -0.1) << " }\nb = { body = \"ground\" }\ndirection = "
-          << Vec(d == 0 ? 1 : 0, d == 1 ? 1 : 0, d == 2 ? 1 : 0) << "\nlaw = { linear = { k = " << k[d] << " } }\n\n";
-    }
-  int id = 101;
-  for (double x : {-0.07, 0.07})
-    for (double y : {-0.05, 0.05}) m << "[[point]]\nid = " << id++ << "\nbody = \"top\"\nat = " << Vec(x, y, 0.08) << "\n\n";
-  id = 201;
-  for (double x : {-0.1, 0.1})
-    for (double y : {-0.08, 0.08}) m << "[[point]]\nid = " << id++ << "\nbody = \"base\"\nat = " << Vec(x, y, -0.06) << "\n\n";
-  return m.str();
-}
 
 std::string StackPlan(unsigned seed) {
   std::vector<std::vector<std::string>> sets(2);
@@ -80,60 +41,6 @@ std::string StackPlan(unsigned seed) {
     for (int i = 0; i < 4; ++i)
       for (const char* d : {"+X", "+Y", "+Z"}) sets[s].push_back(std::to_string((s ? 201 : 101) + i) + d);
   return test_chain::Plan(seed, {"101+Z", "102+X", "203+Y"}, sets);
-}
-
-// ---- the FE beam: 8 Euler–Bernoulli elements (uz, ry per node) on two support springs ----
-
-void WriteBeam(const fs::path& dir) {
-  const int elements = 8, nodes = elements + 1, n = 2 * nodes;
-  const double length = 0.8, ei = 2.1e11 * 0.04 * std::pow(0.02, 3) / 12.0, mass_per_m = 7850.0 * 0.04 * 0.02;
-  const double le = length / elements;
-  Eigen::MatrixXd k = Eigen::MatrixXd::Zero(n, n), m = Eigen::MatrixXd::Zero(n, n);
-  Eigen::Matrix4d ke, me;
-  ke << 12, 6 * le, -12, 6 * le, 6 * le, 4 * le * le, -6 * le, 2 * le * le, -12, -6 * le, 12, -6 * le, 6 * le,
-      2 * le * le, -6 * le, 4 * le * le;
-  ke *= ei / std::pow(le, 3);
-  me << 156, 22 * le, 54, -13 * le, 22 * le, 4 * le * le, 13 * le, -3 * le * le, 54, 13 * le, 156, -22 * le, -13 * le,
-      -3 * le * le, -22 * le, 4 * le * le;
-  me *= mass_per_m * le / 420.0;
-  for (int e = 0; e < elements; ++e) {
-    k.block(2 * e, 2 * e, 4, 4) += ke;
-    m.block(2 * e, 2 * e, 4, 4) += me;
-  }
-  auto write = [&](const fs::path& p, const Eigen::MatrixXd& a) {
-    std::ostringstream s;
-    s.precision(17);
-    int count = 0;
-    std::ostringstream body;
-    body.precision(17);
-    for (int c = 0; c < n; ++c)
-      for (int r = c; r < n; ++r)
-        if (a(r, c) != 0.0) {
-          body << r + 1 << " " << c + 1 << " " << a(r, c) << "\n";
-          ++count;
-        }
-    s << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " " << count << "\n" << body.str();
-    Write(p, s.str());
-  };
-  write(dir / "fe" / "M.mtx", m);
-  write(dir / "fe" / "K.mtx", k);
-  std::ostringstream dofs, xyz;
-  dofs << "node,dof\n";
-  xyz << "node,x,y,z\n";
-  for (int i = 1; i <= nodes; ++i) {
-    dofs << i << ",uz\n" << i << ",ry\n";
-    xyz << i << "," << (i - 1) * le << ",0,0\n";
-  }
-  Write(dir / "fe" / "dofs.csv", dofs.str());
-  Write(dir / "fe" / "nodes.csv", xyz.str());
-  std::ostringstream model;
-  model << "[model]\nname = \"steel bar on two supports (FE)\"\n\n[fe]\nmass = \"fe/M.mtx\"\nstiffness = \"fe/K.mtx\"\n"
-        << "dofs = \"fe/dofs.csv\"\nnodes = \"fe/nodes.csv\"\n\n[damping]\nratio = 0.01\n\n";
-  for (int s = 0; s < 2; ++s)
-    model << "[[spring]]\nname = \"S" << s + 1 << "\"\ngroup = \"supports\"\na = { node = " << (s ? nodes : 1)
-          << " }\nb = { body = \"ground\" }\ndirection = [0, 0, 1]\nlaw = { linear = { k = 3.0e5 } }\n\n";
-  for (int i = 1; i <= nodes; ++i) model << "[[point]]\nid = " << 100 + i << "\nnode = " << i << "\n\n";
-  Write(dir / "beam.toml", model.str());
 }
 
 std::string BeamPlan(unsigned seed) {

@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "diagnose/article_models.hpp"
+
 namespace ema::test_chain {
 
 namespace fs = std::filesystem;
@@ -34,17 +36,6 @@ inline std::string Slurp(const fs::path& p) {
   std::ifstream in(p);
   std::stringstream s;
   s << in.rdbuf();
-  return s.str();
-}
-
-inline void Write(const fs::path& p, const std::string& text) {
-  fs::create_directories(p.parent_path());
-  std::ofstream(p) << text;
-}
-
-inline std::string Vec(double x, double y, double z) {
-  std::ostringstream s;
-  s << "[" << x << ", " << y << ", " << z << "]";
   return s.str();
 }
 
@@ -98,75 +89,6 @@ inline json Diagnose(const fs::path& dir, const fs::path& model,
   args += " --json \"" + out.string() + "\" -o \"" + updated.string() + "\" " + extra;
   EXPECT_EQ(RunEma(dir, args, tag + "-diagnose.log"), 0) << Slurp(dir / (tag + "-diagnose.log"));
   return json::parse(Slurp(out));
-}
-
-// Air-film load-lift table of one pad: exponential (vertical) or inverse-square (lateral).
-inline std::string FilmArrays(bool exponential, bool csv = false) {
-  std::ostringstream gap, load;
-  for (int i = 0; i <= 80; ++i) {
-    const double h = (0.5 + 0.75 * i) * 1e-6;
-    const double w = exponential ? 300.0 * std::exp(-h / 6e-6) : 80.0 * std::pow(5e-6 / h, 2.0);
-    if (csv) {
-      gap << h << "," << w << "\n";
-      continue;
-    }
-    gap << (i ? ", " : "") << h;
-    load << (i ? ", " : "") << w;
-  }
-  if (csv) return "gap,load\n" + gap.str();
-  return "gap = [" + gap.str() + "], load = [" + load.str() + "]";
-}
-
-/// The two-body guideway of the real-chain tests: carriage on 4 vertical (exponential W(h)) and 4
-/// lateral (inverse-square W(h)) air-film pads over a base on 12 mount springs, 8 test points,
-/// setups stud-5um / stud-9um. `lateral_file` non-empty: the lateral curve is read from that CSV
-/// (written by the caller with FilmArrays(false, true)), relative to the model's folder.
-inline std::string ModelToml(const std::string& lateral_group = "bearings", const std::string& lateral_file = "") {
-  std::ostringstream m;
-  m.precision(10);
-  m << "[model]\nname = \"two-body guideway (test)\"\n\n"
-    << "[[body]]\nname = \"carriage\"\nmass = 2.88\ninertia = [0.0117763, 0.0151621, 0.0104617]\ncentre = [0.0, 0.0, 0.0]\n\n"
-    << "[[body]]\nname = \"base\"\nmass = 12.0\ninertia = [0.08, 0.10, 0.15]\ncentre = [0.0, 0.0, -0.08]\n\n"
-    << "[damping]\nratio = 0.01\n\n";
-  int n = 0;
-  const std::string vertical = FilmArrays(true);
-  const std::string lateral = lateral_file.empty() ? FilmArrays(false) : "file = \"" + lateral_file + "\"";
-  for (double x : {-0.06, 0.06})
-    for (double y : {-0.03, 0.03})
-      m << "[[spring]]\nname = \"V" << ++n << "\"\ngroup = \"bearings\"\na = { body = \"carriage\", at = "
-        << Vec(x, y, -0.03) << " }\nb = { body = \"base\" }\ndirection = [0, 0, 1]\n"
-        << "law = { series = { setting = 5.0e-6, elements = [ { air_film = { " << vertical << " } } ] } }\n\n";
-  for (double x : {-0.06, 0.06})
-    for (double y : {-0.045, 0.045})
-      m << "[[spring]]\nname = \"L" << ++n << "\"\ngroup = \"" << lateral_group
-        << "\"\na = { body = \"carriage\", at = " << Vec(x, y, 0.0) << " }\nb = { body = \"base\" }\ndirection = "
-        << Vec(0, y > 0 ? -1.0 : 1.0, 0) << "\n"
-        << "law = { series = { setting = 5.0e-6, elements = [ { air_film = { " << lateral << " } } ] } }\n\n";
-  m << "[[spring]]\nname = \"drive\"\ngroup = \"drive\"\na = { body = \"carriage\", at = [0, 0, 0] }\n"
-       "b = { body = \"base\" }\ndirection = [1, 0, 0]\nlaw = { linear = { k = 3.0e6 } }\n\n";
-  for (double x : {-0.1, 0.1})
-    for (double y : {-0.08, 0.08}) {
-      const std::string at = Vec(x, y, -0.1);
-      ++n;
-      m << "[[spring]]\nname = \"MZ" << n << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = " << at
-        << " }\nb = { body = \"ground\" }\ndirection = [0, 0, 1]\nlaw = { linear = { k = 8.0e6 } }\n\n"
-        << "[[spring]]\nname = \"MX" << n << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = " << at
-        << " }\nb = { body = \"ground\" }\ndirection = [1, 0, 0]\nlaw = { linear = { k = " << (x > 0 ? 3.0e6 : 2.0e6)
-        << " } }\n\n"
-        << "[[spring]]\nname = \"MY" << n << "\"\ngroup = \"mounts\"\na = { body = \"base\", at = " << at
-        << " }\nb = { body = \"ground\" }\ndirection = [0, 1, 0]\nlaw = { linear = { k = 3.0e6 } }\n\n";
-    }
-  int id = 101;
-  for (double x : {-0.06, 0.06})
-    for (double y : {-0.03, 0.03})
-      m << "[[point]]\nid = " << id++ << "\nbody = \"carriage\"\nat = " << Vec(x, y, 0.03) << "\n\n";
-  id = 201;
-  for (double x : {-0.1, 0.1})
-    for (double y : {-0.08, 0.08})
-      m << "[[point]]\nid = " << id++ << "\nbody = \"base\"\nat = " << Vec(x, y, -0.06) << "\n\n";
-  m << "[[setup]]\nname = \"stud-5um\"\noperating = { bearings = 5.0e-6 }\n\n"
-    << "[[setup]]\nname = \"stud-9um\"\noperating = { bearings = 9.0e-6 }\n";
-  return m.str();
 }
 
 }  // namespace ema::test_chain
