@@ -211,6 +211,8 @@ json BuildReportData(const ReportInput& input) {
   data["files"] = input.steps;
   data["problems"] = input.problems;
   data["diagnosis"] = input.diagnosis.is_null() ? json::object() : input.diagnosis;
+  data["diagnosed_places"] = input.diagnosed_places.is_null() ? json::array() : input.diagnosed_places;
+  data["history"] = input.history.is_null() ? json::array() : input.history;
   json setups = json::array();
   for (const SetupResults& setup : input.setups) {
     const ShapeTable test = ReadShapeTable(setup.test_modes);

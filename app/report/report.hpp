@@ -41,6 +41,10 @@ struct ReportInput {
   std::vector<std::string> steps;      ///< the files each step wrote, for the "files" list
   std::vector<SetupResults> setups;
   nlohmann::json diagnosis;            ///< `ema diagnose --json`
+  /// Where rank 1's effects act (app::DiagnosedPlaces): drawn over the test geometry.
+  nlohmann::json diagnosed_places;
+  /// OUTDIR/history.json (app::AppendRunHistory): the model versions of successive runs.
+  nlohmann::json history;
   std::vector<std::string> problems;   ///< steps that failed or were skipped, shown in the page
 };
 
