@@ -114,6 +114,12 @@ TEST_F(Acceptance, TwoEffectsOfDifferentKindsOnDifferentTargets) {
   EXPECT_EQ(first["effects"][1]["target"], "mounts");
   // Implausible physics loses: no weighed body (2 % prior) found far off its mass ranks first.
   EXPECT_EQ(std::string(first["kind"]).find("mass_scale"), std::string::npos);
+  // Buying frequency agreement by wrecking the shapes loses: every candidate whose mean MAC falls
+  // more than 0.05 below the model as given carries a negligible probability.
+  const double mac0 = d["baseline"]["mean_mac"].get<double>();
+  for (const json& c : d["candidates"])
+    if (c["mean_mac"].is_number() && c["mean_mac"].get<double>() < mac0 - 0.05)
+      EXPECT_LT(c["probability"].get<double>(), 1e-3) << c["kind"] << " " << c["target"];
   // Probabilities: rank 1 dominates and all of them (with "none") sum to 1.
   double sum = 0.0;
   for (const json& c : d["candidates"]) sum += c["probability"].get<double>();

@@ -260,6 +260,32 @@ TEST(Diagnose, PairReportedOnlyWhenItBeatsTheBestSingle) {
   EXPECT_GT(first.probability, 0.5);
 }
 
+TEST(Diagnose, PoorlyMeasuredModeWeighsLess) {
+  // One test mode 3 % off (a badly fitted pole). When the fit says so (its frequency spread is
+  // 3 % of f), that mode's residual is divided by its σ and barely pulls the fit; without the
+  // spread it counts like every other mode and biases the factor.
+  const Model nominal = Guideway();
+  const Model truth = model::ApplyEffect(nominal, Make("stiffness_scale", "mounts", "factor", 0.6));
+  ModeSet test = NoisyTest(truth, "", 61, 2e-4, 1e-2);
+  test.modes[0].frequency_hz *= 1.03;
+  DiagnoseOptions options;
+  options.max_effects = 1;
+  options.members = false;
+  const Diagnosis unweighted = Diagnose(nominal, {{"", test}}, options);
+  test.modes[0].frequency_spread_hz = 0.03 * test.modes[0].frequency_hz;
+  const Diagnosis weighted = Diagnose(nominal, {{"", test}}, options);
+  ASSERT_EQ(weighted.candidates.front().kind, "stiffness_scale") << weighted.explanation;
+  ASSERT_EQ(weighted.candidates.front().target, "mounts") << weighted.explanation;
+  const double with_sigma = FittedValue(weighted.candidates.front(), "factor");
+  // 0.02 % noise on 11 good modes: within 1 % of the truth once the bad mode is down-weighted.
+  EXPECT_NEAR(with_sigma / 0.6, 1.0, 0.01);
+  double without_sigma = kNaN;
+  for (const Candidate& c : unweighted.candidates)
+    if (c.kind == "stiffness_scale" && c.target == "mounts") without_sigma = FittedValue(c, "factor");
+  ASSERT_TRUE(std::isfinite(without_sigma));
+  EXPECT_LT(std::abs(with_sigma - 0.6), std::abs(without_sigma - 0.6));
+}
+
 TEST(Diagnose, BadInput) {
   const Model nominal = Guideway();
   ModeSet test = NoisyTest(nominal, "", 5);
