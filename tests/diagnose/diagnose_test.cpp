@@ -191,6 +191,11 @@ TEST(Diagnose, NoEffectRanksNoneFirst) {
   const Diagnosis d = Diagnose(nominal, tests, options);
   EXPECT_EQ(d.candidates.front().kind, "none") << d.explanation;
   EXPECT_NE(d.explanation.find("No candidate effect"), std::string::npos);
+  // 0.1 % noise at a 0.1 % floor: "none" is clearly the most probable reading.
+  EXPECT_GT(d.candidates.front().probability, 0.5) << d.explanation;
+  double sum = 0.0;
+  for (const Candidate& c : d.candidates) sum += c.probability;
+  EXPECT_NEAR(sum, 1.0, 1e-12);
 }
 
 TEST(Diagnose, TwoSetupsSeparateSeriesComplianceFromStiffnessScale) {

@@ -122,12 +122,15 @@ TEST_F(RealChain, EveryEffectKindRanksFirstWithItsParameter) {
     SCOPED_TRACE(h.tag);
     const fs::path truth = Truth(h.tag, h.block);
     const fs::path modes = Chain(truth, "", h.tag, ++seed);
-    const json d = Diagnose(kTmp / "nominal.toml", {{"", modes}}, h.tag, "--no-pairs");
+    const json d = Diagnose(kTmp / "nominal.toml", {{"", modes}}, h.tag);  // full search: members, combinations
     const json& first = d["candidates"][0];
     EXPECT_EQ(first["kind"], h.kind) << d["explanation"];
     EXPECT_EQ(first["target"], h.target) << d["explanation"];
     ASSERT_TRUE(first["parameters"].contains(h.parameter)) << first.dump();
     EXPECT_NEAR(first["parameters"][h.parameter].get<double>() / h.value, 1.0, 0.05) << first.dump();
+    // The chain's frequencies are accurate to ~1e-4, ten times below the σ floor: the truth is
+    // far more probable than anything else.
+    EXPECT_GT(first["probability"].get<double>(), 0.5) << d["explanation"];
   }
 }
 
@@ -135,6 +138,8 @@ TEST_F(RealChain, NoHiddenEffectRanksNone) {
   const fs::path modes = Chain(kTmp / "nominal.toml", "", "none", 3);
   const json d = Diagnose(kTmp / "nominal.toml", {{"", modes}}, "none");
   EXPECT_EQ(d["candidates"][0]["kind"], "none") << d["explanation"];
+  EXPECT_GT(d["candidates"][0]["probability"].get<double>(), 0.5) << d["explanation"];
+  EXPECT_TRUE(d["candidates"][0]["effects"].empty());
 }
 
 TEST_F(RealChain, TwoStudSettingsSeparateComplianceFromStiffnessScale) {
