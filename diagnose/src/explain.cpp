@@ -161,12 +161,15 @@ std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
     words << "No candidate effect explains the mismatch by more than its prior and parameter cost (probability "
           << prob(first.probability) << "): the model as given agrees to a mean frequency error of "
           << pct(none.mean_abs_frequency_error_pct) << " (mean MAC " << FormatNumber(none.mean_mac, 3) << ").";
+    // The effect that fits best (lowest misfit), whatever its probability.
+    const Candidate* closest = nullptr;
     for (const Candidate& c : all)
-      if (c.kind != "none" && c.error.empty()) {
-        words << " The best effect, " << DescribeCandidate(c) << ", would bring it to "
-              << pct(c.mean_abs_frequency_error_pct) << ", not enough to pay for its parameter.";
-        break;
-      }
+      if (c.kind != "none" && c.error.empty() && c.plausible && (!closest || c.cost < closest->cost)) closest = &c;
+    if (closest && closest->cost < none.cost)
+      words << " The effect that fits best, " << DescribeCandidate(*closest) << ", brings the misfit from "
+            << FormatNumber(none.cost, 3) << " to " << FormatNumber(closest->cost, 3) << " σ² over "
+            << none.modes.size() << " test modes (mean frequency error " << pct(closest->mean_abs_frequency_error_pct)
+            << "): not enough to pay for its parameters.";
     return words.str();
   }
   words << DescribeCandidate(first) << " (probability " << prob(first.probability)
