@@ -167,22 +167,15 @@ int RunDiagnose(const std::vector<std::string>& args) {
   positional.add("model", 1);
   po::variables_map vm;
   if (!cli::Parse(args, usage, all_options, positional, &vm)) return 0;
-  if (criterion == "evidence") {
-    dopt.criterion = diagnose::Criterion::kEvidence;
-  } else if (criterion == "bic") {
-    dopt.criterion = diagnose::Criterion::kBic;
-  } else if (criterion == "aicc") {
-    dopt.criterion = diagnose::Criterion::kAicc;
-  } else {
+  if (!diagnose::StringToCriterion(criterion, &dopt.criterion))
     throw UsageError("--criterion must be evidence, bic or aicc, got '" + criterion + "'");
-  }
   if (no_pairs) dopt.max_effects = 1;
   if (no_members) dopt.members = false;
   if (vm.count("shape-weight")) {
     if (!(shape_weight > 0.0)) throw UsageError("--shape-weight must be > 0");
     dopt.shape_sigma = 1e-3 / shape_weight;
   }
-  if (const std::string bad = dopt.IsValid(); !bad.empty()) throw UsageError(bad);
+  if (std::string bad; !dopt.IsValid(&bad)) throw UsageError(bad);
   if (force_levels.size() == 1) throw UsageError("--force-level needs at least two levels");
 
   const model::Model model = formats::ReadModelFile(model_path);
@@ -205,7 +198,10 @@ int RunDiagnose(const std::vector<std::string>& args) {
                      {"paired_modes", d.baseline.paired_modes}};
   out["candidates"] = json::array();
   for (const auto& c : d.candidates) out["candidates"].push_back(CandidateJson(c));
-  out["criterion"] = criterion;
+  out["criterion"] = diagnose::CriterionToString(dopt.criterion);
+  out["options"] = {{"frequency_floor", dopt.frequency_floor}, {"shape_sigma", dopt.shape_sigma},
+                    {"max_effects", dopt.max_effects}, {"members", dopt.members},
+                    {"mac_min", dopt.pairing.mac_min}};  // the effective options, for reproducibility
   out["residual_count"] = d.residual_count;
   out["test_modes"] = d.test_mode_count;
   out["model_solves"] = d.model_solves;

@@ -13,15 +13,35 @@
 
 namespace ema::diagnose {
 
-std::string DiagnoseOptions::IsValid() const {
-  if (!(frequency_floor > 0.0)) return "frequency_floor must be > 0";
-  if (!(shape_sigma > 0.0)) return "shape_sigma must be > 0";
-  if (!(robust_threshold > 0.0)) return "robust_threshold must be > 0";
-  if (scan_points < 3) return "scan_points must be >= 3";
-  if (max_effects < 1 || max_effects > 3) return "max_effects must be 1, 2 or 3";
-  if (beam < 1 || additions < 1) return "beam and additions must be >= 1";
-  if (max_fitted_singles < 0) return "max_fitted_singles must be >= 0";
-  return "";
+bool DiagnoseOptions::IsValid(std::string* error) const {
+  std::string why;
+  if (!(frequency_floor > 0.0)) why = "frequency_floor must be > 0, got " + std::to_string(frequency_floor);
+  else if (!(shape_sigma > 0.0)) why = "shape_sigma must be > 0, got " + std::to_string(shape_sigma);
+  else if (!(robust_threshold > 0.0)) why = "robust_threshold must be > 0, got " + std::to_string(robust_threshold);
+  else if (scan_points < 3) why = "scan_points must be >= 3, got " + std::to_string(scan_points);
+  else if (max_effects < 1 || max_effects > 3) why = "max_effects must be 1, 2 or 3, got " + std::to_string(max_effects);
+  else if (beam < 1 || additions < 1) why = "beam and additions must be >= 1";
+  else if (max_fitted_singles < 0) why = "max_fitted_singles must be >= 0";
+  if (error) *error = why;
+  return why.empty();
+}
+
+std::string CriterionToString(Criterion criterion) {
+  switch (criterion) {
+    case Criterion::kEvidence: return "evidence";
+    case Criterion::kBic: return "bic";
+    case Criterion::kAicc: return "aicc";
+  }
+  return "evidence";
+}
+
+bool StringToCriterion(const std::string& name, Criterion* criterion) {
+  for (Criterion c : {Criterion::kEvidence, Criterion::kBic, Criterion::kAicc})
+    if (name == CriterionToString(c)) {
+      *criterion = c;
+      return true;
+    }
+  return false;
 }
 
 namespace {
@@ -117,7 +137,7 @@ std::vector<Step> Steps(detail::Problem* p, const std::vector<detail::Fit>& fits
 
 Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes>& tests,
                    const DiagnoseOptions& options) {
-  if (const std::string bad = options.IsValid(); !bad.empty()) throw UsageError("diagnose options: " + bad);
+  if (std::string bad; !options.IsValid(&bad)) throw UsageError("diagnose options: " + bad);
   const std::string where = input_model.origin.empty() ? "model" : input_model.origin;
   const model::Model base = model::ApplyEffects(input_model);
   CheckTests(base, tests, where);

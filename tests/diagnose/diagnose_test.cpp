@@ -291,6 +291,26 @@ TEST(Diagnose, PoorlyMeasuredModeWeighsLess) {
   EXPECT_LT(std::abs(with_sigma - 0.6), std::abs(without_sigma - 0.6));
 }
 
+TEST(DiagnoseOptions, DefaultsAreValidAndBadValuesAreNamed) {
+  std::string why;
+  EXPECT_TRUE(DiagnoseOptions{}.IsValid(&why)) << why;
+  DiagnoseOptions o;
+  o.max_effects = 4;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("max_effects"), std::string::npos) << why;
+  o = DiagnoseOptions{};
+  o.frequency_floor = 0.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("frequency_floor"), std::string::npos) << why;
+  Criterion c = Criterion::kBic;
+  EXPECT_TRUE(StringToCriterion("evidence", &c));
+  EXPECT_EQ(c, Criterion::kEvidence);
+  EXPECT_EQ(CriterionToString(Criterion::kAicc), "aicc");
+  EXPECT_FALSE(StringToCriterion("nonsense", &c));
+  // Diagnose refuses invalid options as a usage error.
+  EXPECT_THROW(Diagnose(Guideway(), {{"", NoisyTest(Guideway(), "", 5)}}, o), UsageError);
+}
+
 TEST(Diagnose, BadInput) {
   const Model nominal = Guideway();
   ModeSet test = NoisyTest(nominal, "", 5);

@@ -29,6 +29,10 @@ struct SetupModes {
 /// evidence (misfit + prior + the posterior's width). kBic / kAicc: information criteria that
 /// ignore the priors (kept for comparison).
 enum class Criterion { kEvidence, kBic, kAicc };
+/// "evidence", "bic", "aicc".
+std::string CriterionToString(Criterion criterion);
+/// The criterion of a name; false for an unknown name.
+bool StringToCriterion(const std::string& name, Criterion* criterion);
 
 struct DiagnoseOptions {
   /// Relative 1σ floor of a test frequency: a mode's σ is max(its measured σ, floor × f). The
@@ -62,8 +66,8 @@ struct DiagnoseOptions {
   int max_iterations = 30;
   ProgressCallback progress;
 
-  /// Empty when valid, else what is wrong.
-  std::string IsValid() const;
+  /// True when every option is in range; else false with the reason in *error (Ceres style).
+  bool IsValid(std::string* error) const;
 };
 
 /// One fitted parameter with its posterior 1σ.
