@@ -167,7 +167,7 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
   none.explained_pct = 0.0;
 
   // Stages 2–4: screening, fits, combinations.
-  detail::SearchResult search = detail::Search(&problem, options, none_fit.objective);
+  detail::SearchResult search = detail::Search(&problem, options);
   result.candidates_screened = search.screened;
 
   // Stage 5: ranking.

@@ -167,7 +167,7 @@ struct SearchResult {
 };
 
 /// Screening, fits of the promising singles and forward/backward combinations.
-SearchResult Search(Problem* problem, const DiagnoseOptions& options, double none_objective);
+SearchResult Search(Problem* problem, const DiagnoseOptions& options);
 
 /// Fits a given set from the θ of its fitted subsets (used for the "error falls" steps).
 Fit FitSubset(Problem* problem, const std::vector<Fit>& known, const std::vector<int>& set, const DiagnoseOptions& options);

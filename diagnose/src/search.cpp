@@ -119,8 +119,7 @@ std::pair<std::vector<int>, std::vector<double>> Sorted(const std::vector<int>& 
 
 }  // namespace
 
-SearchResult Search(Problem* p, const DiagnoseOptions& options, double none_objective) {
-  (void)none_objective;
+SearchResult Search(Problem* p, const DiagnoseOptions& options) {
   const std::vector<Atom>& atoms = p->Atoms();
   SearchResult result;
   std::map<std::vector<int>, Fit> fitted;
