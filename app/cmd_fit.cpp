@@ -111,8 +111,8 @@ int RunFit(const std::vector<std::string>& args) {
   int order_max = 0, threads = 0;
   curvefit::FitOptions fit_options;
   options.add_options()
-      ("input", po::value(&input)->required(), "FRF file (UFF 58, function type 4), or a directory holding\n"
-                                               "meas_point_{1,2,3}.txt column texts")
+      ("input", po::value(&input)->required(), "FRFs: UFF 58 (function type 4), an FRF table or a folder\n"
+                                               "of FRF columns with its frfs.csv index (docs/formats.md)")
       ("output,o", po::value(&output)->required(), "mode shapes out (UFF 55 complex modes)")
       ("band", po::value(&band), "analysis band LO:HI in Hz (default: all lines above DC)")
       ("order-max", po::value(&order_max), "highest PolyMAX order (default: ceil(120/references), limited by the lines)")
@@ -143,6 +143,7 @@ int RunFit(const std::vector<std::string>& args) {
   }
   if (vm.count("order-max") && order_max < 1) throw UsageError("--order-max: expected a positive order");
   fit_options.polymax.order_max = order_max;
+  if (threads < 0) throw UsageError("--threads: expected 0 (all cores) or a positive count");
   fit_options.polymax.threads = threads;
   if (select != "auto") {
     std::stringstream ss(select);
@@ -159,8 +160,8 @@ int RunFit(const std::vector<std::string>& args) {
   if (fit_options.method == curvefit::FitMethod::kPeak && (!stab_path.empty() || !plot_path.empty()))
     throw UsageError("--stabilisation and --plot need --method polymax");
 
-  // A directory is read as column-text FRFs (the frf-meas-point layout, see formats/io.hpp).
-  const FrfSet frfs = std::filesystem::is_directory(input) ? formats::ReadMeasPointFrfs(input) : formats::ReadFrfSet(input);
+  // UFF 58, or an FRF table / a folder of FRF columns (formats::ReadFrfTable).
+  const FrfSet frfs = formats::ReadFrfSet(input);
   curvefit::FitResult fit;
   try {
     fit = curvefit::Fit(frfs, fit_options, input, [](double f, std::string_view stage) {

@@ -122,6 +122,7 @@ int RunFrf(const std::vector<std::string>& args) {
   }
   if (!(imp.exp_end_level > 0.0 && imp.exp_end_level < 1.0)) throw UsageError("--exp-end-level: expected 0 < level < 1");
   if (!(imp.trigger_level > 0.0 && imp.trigger_level < 1.0)) throw UsageError("--trigger-level: expected 0 < level < 1");
+  if (opt.threads < 0) throw UsageError("--threads: expected 0 (all cores) or a positive count");
   if (!(imp.double_hit_high > 0.0 && imp.double_hit_high < 1.0))
     throw UsageError("--double-hit-ratio: expected 0 < ratio < 1");
   imp.double_hit_low = std::min(imp.double_hit_low, 0.5 * imp.double_hit_high);

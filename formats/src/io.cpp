@@ -230,6 +230,13 @@ void WriteTimeRecords(const std::filesystem::path& path, const std::vector<TimeR
 // FRFs
 
 FrfSet ReadFrfSet(const std::filesystem::path& path) {
+  if (std::filesystem::is_directory(path)) return ReadFrfTable(path);
+  if (!uff::LooksLikeUff(path)) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw InputError(path.string(), "no such file");
+    if (std::filesystem::file_size(path, ec) == 0) throw InputError(path.string(), "empty file");
+    return ReadFrfTable(path);
+  }
   uff::Reader reader(path);
   Dataset d;
   struct Item {

@@ -215,7 +215,10 @@ TEST(Report, PageIsSelfContainedAndCarriesTheData) {
 }
 
 TEST(Report, RendersInHeadlessChromium) {
-  if (!test::ChromiumAvailable()) GTEST_SKIP() << "chromium not installed (scripts/install-deps.sh --test)";
+  if (!test::ChromiumAvailable()) {
+    if (!test::BrowserCheckMayBeSkipped()) FAIL() << "chromium missing in CI (scripts/install-deps.sh --test installs it)";
+    GTEST_SKIP() << "chromium not installed (scripts/install-deps.sh --test)";
+  }
   const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "report_synthetic";
   fs::create_directories(dir);
   {

@@ -54,7 +54,7 @@ std::string BeamPlan(unsigned seed) {
 class Acceptance : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!test_chain::HaveExecutable()) GTEST_SKIP() << "the ema executable is not built: " << EMA_EXECUTABLE;
+    if (!test_chain::HaveExecutable()) FAIL() << "the ema executable is not built: " << EMA_EXECUTABLE;
     fs::create_directories(kTmp);
   }
 

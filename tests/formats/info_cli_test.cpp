@@ -84,7 +84,7 @@ TEST(FormatsInfo, SummaryOfCsvTimeData) {
 }
 
 TEST(FormatsInfo, CliHelpAndExitCodes) {
-  if (!HaveEma()) GTEST_SKIP() << "ema executable not built: " << EMA_EXECUTABLE;
+  if (!HaveEma()) FAIL() << "ema executable not built: " << EMA_EXECUTABLE;
   CliRun r = Ema("info --help");
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.out.find("ema info FILE"), std::string::npos) << r.out;
@@ -106,7 +106,7 @@ TEST(FormatsInfo, CliHelpAndExitCodes) {
 }
 
 TEST(FormatsInfo, CliSummaryAndJson) {
-  if (!HaveEma()) GTEST_SKIP() << "ema executable not built: " << EMA_EXECUTABLE;
+  if (!HaveEma()) FAIL() << "ema executable not built: " << EMA_EXECUTABLE;
   const fs::path json = fs::path(EMA_TEST_TMP_DIR) / "info.json";
   fs::remove(json);
   const CliRun r = Ema("info '" + Data("ufffiles-jl/dataset58_case8_binary.unv").string() + "' --json '" + json.string() + "'");

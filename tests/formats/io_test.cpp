@@ -233,19 +233,93 @@ TEST(FormatsIo, ModeSetRoundTrip) {
   }
 }
 
-TEST(FormatsIo, MeasPointFrfs) {
-  const FrfSet s = ReadMeasPointFrfs(fs::path(EMA_SHARED_DATA_DIR) / "frf-meas-point");
+void ExpectMeasPointBeam(const FrfSet& s) {
   ASSERT_EQ(s.LineCount(), 1001);
   EXPECT_EQ(s.ReferenceCount(), 3);
   EXPECT_EQ(s.OutputCount(), 1);
   EXPECT_EQ(s.outputs[0], (Dof{1, 1}));
   EXPECT_EQ(s.references[2], (Dof{3, 1}));
   EXPECT_DOUBLE_EQ(s.frequency_hz[1000], 1000.0);
-  // First lines of meas_point_1.txt, read by hand.
+  EXPECT_EQ(s.output_quantity, Quantity::kAcceleration);
+  // First lines of meas_point_1.txt and meas_point_3.txt, read by hand.
   EXPECT_DOUBLE_EQ(s.h[0](0, 0).real(), -0.0774752256830106);
   EXPECT_DOUBLE_EQ(s.h[0](0, 0).imag(), 2.6838208936737454e-08);
   EXPECT_DOUBLE_EQ(s.h[0](1, 0).real(), -0.17515115491765987);
   EXPECT_DOUBLE_EQ(s.h[0](1, 0).imag(), -0.12042372070051006);
+  EXPECT_DOUBLE_EQ(s.h[2](1, 0).real(), 0.010496299469543217);
+  EXPECT_DOUBLE_EQ(s.h[2](1, 0).imag(), -0.0970558419720156);
+}
+
+TEST(FormatsIo, MeasPointFrfsAsPublishedWithoutIndex) { ExpectMeasPointBeam(ReadFrfSet(fs::path(EMA_SHARED_DATA_DIR) / "frf-meas-point")); }
+
+TEST(FormatsIo, MeasPointSampleThroughItsIndex) {
+  ExpectMeasPointBeam(ReadFrfSet(fs::path(EMA_SOURCE_DIR) / "samples" / "meas-point"));
+}
+
+TEST(FormatsIo, FrfTableAnyDofsReImPairsAndMissingFrfs) {
+  // Two responses, two references, one FRF (101-Z from 7+Y) not measured; whitespace separated,
+  // one FRF as an re:/im: column pair. Every value below is read back exactly.
+  const fs::path p = TmpFile("table.txt");
+  WriteText(p,
+            "# quantity: mobility\n"
+            "frequency_hz  3:+Z/7+Y   re:101-Z/3+Z  im:101-Z/3+Z  3+Z/3+Z\n"
+            "10.0  (1+2j)  0.5  -0.25  7\n"
+            "10.5  (3-4e-1j)  1.5  2.5  nan\n"
+            "11.0  -1-1j  0  1  (0+0j)\n");
+  const FrfSet s = ReadFrfSet(p);
+  ASSERT_EQ(s.LineCount(), 3);
+  EXPECT_DOUBLE_EQ(s.frequency_hz[2], 11.0);
+  EXPECT_EQ(s.output_quantity, Quantity::kVelocity);
+  EXPECT_EQ(s.response_unit, "m/s");
+  ASSERT_EQ(s.outputs, (std::vector<Dof>{{3, 3}, {101, -3}}));
+  ASSERT_EQ(s.references, (std::vector<Dof>{{7, 2}, {3, 3}}));
+  EXPECT_EQ(s.h[0](1, 0), std::complex<double>(3.0, -0.4));
+  EXPECT_TRUE(std::isnan(s.h[0](0, 1).real()));  // 101-Z/7+Y: not in the table
+  EXPECT_EQ(s.h[1](1, 1), std::complex<double>(1.5, 2.5));
+  EXPECT_EQ(s.h[1](2, 1), std::complex<double>(0.0, 1.0));
+  EXPECT_EQ(s.h[1](0, 0), std::complex<double>(7.0, 0.0));
+  EXPECT_TRUE(std::isnan(s.h[1](1, 0).real()));  // a missing line
+}
+
+TEST(FormatsIo, FrfTableErrorsNameFileAndLine) {
+  const fs::path p = TmpFile("bad_table.csv");
+  auto expect_error = [&](const std::string& text, const std::string& fragment) {
+    WriteText(p, text);
+    try {
+      ReadFrfSet(p);
+      ADD_FAILURE() << "no error for: " << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  expect_error("frequency_hz,1+X/2+X\n0,1\n1,1\n2.5,1\n", "bad_table.csv:4: frequencies must be evenly spaced");
+  expect_error("frequency_hz,1+X\n0,1\n", "bad_table.csv:1: column '1+X': expected RESPONSE/REFERENCE");
+  expect_error("time,1+X/2+X\n0,1\n", "bad_table.csv:1: expected a header such as");
+  expect_error("frequency_hz,1+X/2+X,1+X/2+X\n0,1,1\n1,1,1\n", "FRF 1+X/2+X given twice");
+  expect_error("frequency_hz,re:1+X/2+X\n0,1\n1,1\n", "im: column missing");
+  expect_error("frequency_hz,1+X/2+X\n0,1\n1,(1+x)\n", "bad_table.csv:3: column 2: expected a complex number");
+  expect_error("frequency_hz,1+X/2+X\n0,1,3\n", "bad_table.csv:2: expected 2 cells like the header, found 3");
+  expect_error("# quantity: force\nfrequency_hz,1+X/2+X\n0,1\n", "bad_table.csv:1: quantity: expected acceleration");
+  // A folder of column files without its index says what the index must hold.
+  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "frf_columns_without_index";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  WriteText(dir / "a.txt", "(1+1j)\n");
+  try {
+    ReadFrfSet(dir);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("needs an index 'frfs.csv'"), std::string::npos) << e.what();
+  }
+  // An index whose column files differ in length names the offending file.
+  WriteText(dir / "b.txt", "(1+1j)\n(2+2j)\n");
+  WriteText(dir / "frfs.csv", "# frequency_hz: 0:1\nfile,response,reference\na.txt,1+X,1+X\nb.txt,1+X,2+X\n");
+  try {
+    ReadFrfSet(dir);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("b.txt: expected 1 values"), std::string::npos) << e.what();
+  }
 }
 
 TEST(FormatsIo, ComplexColumnTextForms) {

@@ -53,6 +53,23 @@ TEST(Cli, ModelWritesModesAndJsonOfTheCarriage) {
   EXPECT_NE(text.find("gap h = 12.7"), std::string::npos) << text;  // --explain: solved gap
 }
 
+TEST(Cli, ModelMaxModesKeepsTheLowestModes) {
+  // The carriage has five elastic modes; --max-modes 2 keeps the two lowest, with the same
+  // frequencies as the full solution (the same eigenproblem, fewer modes requested).
+  const fs::path dir = testing::TempDir("cli_model_max_modes");
+  const std::string base = "model " + kData + "carriage.toml --setup stud-5um ";
+  ASSERT_EQ(Ema(base + "-o " + (dir / "all.unv").string() + " --json " + (dir / "all.json").string(), dir).code, 0);
+  ASSERT_EQ(Ema(base + "-o " + (dir / "two.unv").string() + " --json " + (dir / "two.json").string() + " --max-modes 2", dir).code, 0);
+  std::ifstream a(dir / "all.json"), t(dir / "two.json");
+  const nlohmann::json all = nlohmann::json::parse(a), two = nlohmann::json::parse(t);
+  ASSERT_EQ(all["modes"].size(), 5u);
+  ASSERT_EQ(two["modes"].size(), 2u);
+  for (int k = 0; k < 2; ++k)
+    EXPECT_NEAR(two["modes"][k]["frequency_hz"].get<double>(), all["modes"][k]["frequency_hz"].get<double>(),
+                1e-9 * all["modes"][k]["frequency_hz"].get<double>());
+  EXPECT_EQ(Ema(base + "-o " + (dir / "x.unv").string() + " --max-modes -1", dir).code, 2);
+}
+
 TEST(Cli, ModelBadInputExitsOneAndWritesNothing) {
   const fs::path dir = testing::TempDir("cli_bad");
   std::ifstream src(kData + "carriage.toml");

@@ -5,8 +5,9 @@
 // X-Y plane (Z direction, at x = +-l_l, on the centre line y = 0). Then K = diag(6Ke, 4Ke,
 // 6Ke l_w^2, 4Ke l_l^2, 4Ke l_l^2) for (Y, Z, roll, pitch, yaw) and X is free (one zero mode).
 // The lever arms are not printed; they follow from the table: l_w from mode CR and l_l from
-// mode CP of Table 7.1. Every other entry of both tables is then an independent check of the
-// full 6-DOF assembly and eigen solution.
+// mode CP of Table 7.1. Those two entries are therefore not checked (they would only give back
+// what was put in); CV, CY and CL of Table 7.1 and all five entries of Table 7.2 (another
+// stiffness, 1.7 N/um) are independent checks of the full 6-DOF assembly and eigen solution.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -54,6 +55,7 @@ std::string CarriageToml(const std::string& law) {
 struct Row {
   const char* mode;
   double hz;
+  bool gave_a_lever_arm = false;  ///< used to derive l_w or l_l: not an independent check
 };
 
 void CheckTable(double ke, const std::vector<Row>& table, const char* name) {
@@ -64,19 +66,22 @@ void CheckTable(double ke, const std::vector<Row>& table, const char* name) {
   const Solution sol = Solve(model);
   ASSERT_EQ(sol.rigid_body_frequencies_hz.size(), 1u) << "X slides freely: one zero mode";
   ASSERT_EQ(sol.modes.modes.size(), 5u);
-  std::vector<double> expected;
-  for (const Row& r : table) expected.push_back(r.hz);
-  std::sort(expected.begin(), expected.end());
+  std::vector<Row> expected = table;
+  std::sort(expected.begin(), expected.end(), [](const Row& a, const Row& b) { return a.hz < b.hz; });
+  int checked = 0;
   for (std::size_t i = 0; i < 5; ++i) {
+    if (expected[i].gave_a_lever_arm) continue;
+    ++checked;
     // Tolerance 1 Hz: the thesis prints frequencies rounded to 1 Hz and the lever arms come from
     // two of those rounded values (+-0.25 % each), i.e. +-0.8 Hz at 325 Hz.
-    EXPECT_NEAR(sol.modes.modes[i].frequency_hz, expected[i], 1.0) << name << " mode " << i + 1;
+    EXPECT_NEAR(sol.modes.modes[i].frequency_hz, expected[i].hz, 1.0) << name << " mode " << expected[i].mode;
     EXPECT_DOUBLE_EQ(sol.modes.modes[i].damping_ratio, 0.01);
   }
+  EXPECT_GE(checked, 3) << name;
 }
 
 TEST(ThesisCarriage, Table71FiveMicronSetting) {
-  CheckTable(2.8e6, {{"CR", 198}, {"CP", 270}, {"CV", 314}, {"CY", 325}, {"CL", 384}}, "table71");
+  CheckTable(2.8e6, {{"CR", 198, true}, {"CP", 270, true}, {"CV", 314}, {"CY", 325}, {"CL", 384}}, "table71");
 }
 
 TEST(ThesisCarriage, Table72NineMicronSetting) {

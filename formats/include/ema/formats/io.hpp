@@ -22,7 +22,8 @@ std::vector<TimeRecord> ReadTimeRecords(const std::filesystem::path& path);
 void WriteTimeRecords(const std::filesystem::path& path, const std::vector<TimeRecord>& records,
                       const WriteOptions& options = {});
 
-/// FRFs (UFF 58 function type 4) and, when present, coherences (type 6) of one test.
+/// FRFs (UFF 58 function type 4) and, when present, coherences (type 6) of one test; a folder
+/// or a file that is not UFF is read as an FRF table (ReadFrfTable).
 FrfSet ReadFrfSet(const std::filesystem::path& path);
 
 /// Writes FRFs (type 4) and coherences (type 6) with correct units and data-type codes.
@@ -47,14 +48,17 @@ void WriteCsvTimeRecords(const std::filesystem::path& path, const std::vector<Ti
 /// blank lines and lines starting with '#' are skipped; NaN allowed.
 Eigen::VectorXcd ReadComplexColumnText(const std::filesystem::path& path);
 
-/// Builds an FrfSet from one complex column file per reference (all with the same response
-/// DOF), on the grid f0_hz + i*df_hz. Every file must have the same number of lines.
-FrfSet FrfSetFromColumnTexts(const std::vector<std::filesystem::path>& files, const std::vector<Dof>& references,
-                             const Dof& output, double f0_hz, double df_hz,
-                             Quantity output_quantity = Quantity::kAcceleration);
+/// The index file of a folder of FRF columns (see ReadFrfTable).
+inline constexpr const char* kFrfIndexFileName = "frfs.csv";
 
-/// The shared measured beam data (`frf-meas-point/meas_point_{1,2,3}.txt` in `directory`):
-/// response node 1 +X, references 1, 2, 3 +X, 0..1000 Hz at 1 Hz, accelerance.
-FrfSet ReadMeasPointFrfs(const std::filesystem::path& directory);
+/// Measured FRFs as text tables (docs/formats.md, "FRF tables"), any DOFs:
+/// - a file: a table whose header names the frequency column and each FRF as
+///   RESPONSE/REFERENCE (`frequency_hz, 1+X/1+X, 1+X/2+X`), complex cells `(re+imj)`, or
+///   `re:1+X/2+X` and `im:1+X/2+X` column pairs; `# quantity: acceleration|velocity|displacement`;
+/// - a folder: its `frfs.csv` index (`file, response, reference` and a
+///   `# frequency_hz: START:STEP` line) names one complex-column file per FRF; a folder of the
+///   published pyuff beam data (`meas_point_{1,2,3}.txt`, no index) reads with that data's DOFs.
+/// FRFs not in the table are NaN (not measured). Throws InputError naming the file and line.
+FrfSet ReadFrfTable(const std::filesystem::path& path);
 
 }  // namespace ema::formats
