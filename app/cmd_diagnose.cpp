@@ -158,15 +158,15 @@ int RunDiagnose(const std::vector<std::string>& args) {
       "modes fitted at one impact force level, as FORCE_N=MODES.unv; two or more flag amplitude-dependent "
       "stiffness");
   cli::AddHelp(&options);
-  po::options_description priors(
-      "priors (relative 1σ per effect kind; the model's `uncertainty` keys and [priors] table override them):\n" +
-      diagnose::PriorDefaultsText());
-  po::options_description all_options;
-  all_options.add(options).add(priors);
   po::positional_options_description positional;
   positional.add("model", 1);
   po::variables_map vm;
-  if (!cli::Parse(args, usage, all_options, positional, &vm)) return 0;
+  if (!cli::Parse(args, usage, options, positional, &vm)) {
+    std::cout << "Default priors (relative 1σ per effect kind; a body's or spring's `uncertainty` and the model's\n"
+                 "[priors] table override them; docs/diagnose.md):\n"
+              << diagnose::PriorDefaultsText();
+    return 0;
+  }
   if (!diagnose::StringToCriterion(criterion, &dopt.criterion))
     throw UsageError("--criterion must be evidence, bic or aicc, got '" + criterion + "'");
   if (no_pairs) dopt.max_effects = 1;

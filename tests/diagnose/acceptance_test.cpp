@@ -199,5 +199,17 @@ TEST_F(Acceptance, NothingMissingRanksNone) {
   CorrelatesFromElsewhere(Elsewhere("none"), modes, "none");
 }
 
+TEST_F(Acceptance, HelpDocumentsThePriorDefaults) {
+  ASSERT_EQ(test_chain::RunEma(kTmp, "diagnose --help", "help.log"), 0);
+  const std::string help = Slurp(kTmp / "help.log");
+  // The defaults of docs/diagnose.md, one line per kind.
+  for (const char* line : {"series_compliance = 1.5", "stiffness_scale = 0.5", "operating_point = 0.5",
+                           "added_mass = 0.02", "mass_scale = 0.05", "ground_spring = 3"})
+    EXPECT_NE(help.find(line), std::string::npos) << line << "\n" << help;
+  // Bad options are usage errors (exit 2).
+  EXPECT_EQ(test_chain::RunEma(kTmp, "diagnose m.toml --test a.unv --max-effects 4", "bad-max.log"), 2);
+  EXPECT_EQ(test_chain::RunEma(kTmp, "diagnose m.toml --test a.unv --criterion nonsense", "bad-crit.log"), 2);
+}
+
 }  // namespace
 }  // namespace ema
