@@ -56,7 +56,8 @@ struct DiagnoseOptions {
   bool members = true;
   /// Screening: grid points of the scan over one parameter's (log) range.
   int scan_points = 9;
-  /// Singles fitted fully after screening (the best by their screened posterior).
+  /// Member and single-point candidates fitted fully after screening (the best by their screened
+  /// posterior); group, body and all-points candidates are always fitted.
   int max_fitted_singles = 14;
   /// Combinations: up to `max_effects` effects; `beam` best sets grow at each step, each by its
   /// `additions` best screened additions (re-fitted jointly).
