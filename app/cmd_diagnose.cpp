@@ -127,6 +127,7 @@ int RunDiagnose(const std::vector<std::string>& args) {
   positional.add("model", 1);
   po::variables_map vm;
   if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  cli::RefuseOutputsOverInputs(vm, {"model", "test", "force-level"}, {"json", "output"});
   if (criterion == "bic") {
     dopt.criterion = correlation::InformationCriterion::kBic;
   } else if (criterion == "aicc") {

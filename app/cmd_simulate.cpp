@@ -230,6 +230,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   if (!cli::Parse(args, "ema simulate MODEL.toml --plan PLAN.toml -o TIME.unv [--setup NAME] [--binary]", options,
                   positional, &vm))
     return 0;
+  cli::RefuseOutputsOverInputs(vm, {"model", "plan"}, {"output"});
   const model::Model m = formats::ReadModelFile(model_path);
   if (!std::filesystem::exists(plan_path)) throw InputError(plan_path, "plan file not found");
   Plan plan = PlanReader(plan_path).Read();
