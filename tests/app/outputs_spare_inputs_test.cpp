@@ -109,6 +109,8 @@ TEST_F(OutputsSpareInputs, Frf) {
   ExpectRefused("frf time.unv -o out.unv --json time.unv", "--json time.unv", "time.unv");
   ExpectRefused("frf time.unv time2.unv -o frfdir/../time2.unv", "frfdir/../time2.unv", "time2.unv");
   ExpectRefused("frf time.unv -o link.unv", "link.unv", "time.unv");                         // output is a link to it
+  fs::create_hard_link(dir_ / "time2.unv", dir_ / "hard.unv");
+  ExpectRefused("frf time2.unv -o hard.unv", "hard.unv", "time2.unv");                       // a hard link to it
   ExpectRefused("frf time.unv -o \"$PWD/time.unv\"", "/time.unv", "time.unv");               // absolute path
   ExpectRefused("frf time.unv -o out.unv --json out.unv", "--json out.unv", "-o out.unv");  // two outputs, one file
 }
