@@ -64,7 +64,7 @@ class PlanReader : public formats::TomlFields {
     std::string rest = text->substr(i);
     while (!rest.empty() && (rest.front() == ':' || rest.front() == ' ')) rest.erase(rest.begin());
     const int dir = ParseDirection(rest);
-    if (i == 0 || dir == 0 || std::abs(dir) > 3)
+    if (i == 0 || i > 9 || dir == 0 || std::abs(dir) > 3)  // node ids up to 9 digits (int)
       throw InputError(At(n), "key '" + key + "': '" + *text + "' is not a DOF such as \"101+Z\" (node, +X/-X/+Y/-Y/+Z/-Z)");
     return {std::stoi(text->substr(0, i)), dir};
   }
@@ -153,7 +153,7 @@ class PlanReader : public formats::TomlFields {
         for (const auto& [k, v] : *m) {
           const std::string key(k.str());
           if (!v.is_number()) throw InputError(At(v), "[[set]] masses: expected a number for point " + key);
-          const bool digits = !key.empty() && key.find_first_not_of("0123456789") == std::string::npos;
+          const bool digits = !key.empty() && key.size() <= 9 && key.find_first_not_of("0123456789") == std::string::npos;
           if (!digits) throw InputError(At(v), "[[set]] masses: key '" + key + "' is not a test point id");
           set.masses[std::stoi(key)] = *v.value<double>();
         }
