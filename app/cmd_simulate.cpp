@@ -232,7 +232,8 @@ int RunSimulate(const std::vector<std::string>& args) {
     return 0;
   cli::RefuseOutputsOverInputs(vm, {"model", "plan"}, {"output"});
   const model::Model m = formats::ReadModelFile(model_path);
-  if (!std::filesystem::exists(plan_path)) throw InputError(plan_path, "plan file not found");
+  std::error_code exists_ec;
+  if (!std::filesystem::exists(plan_path, exists_ec)) throw InputError(plan_path, "plan file not found");
   Plan plan = PlanReader(plan_path).Read();
   if (!setup.empty()) plan.setup = setup;
 

@@ -55,6 +55,9 @@ Eigen::SparseMatrix<double> ReadMatrixMarket(const std::filesystem::path& path) 
     break;
   }
   if (rows < 0) throw InputError(file, "missing the size line 'rows cols entries'");
+  if (symmetric && rows != cols)
+    throw InputError(file + ":" + std::to_string(line_no), "a symmetric matrix must be square, the size line gives " +
+                                                               std::to_string(rows) + "x" + std::to_string(cols));
   std::vector<Eigen::Triplet<double>> t;
   // The entries are counted as they come: a size line's count alone never reserves memory.
   t.reserve(static_cast<std::size_t>(std::min(nnz, 1L << 20)));

@@ -234,7 +234,8 @@ class Reader : public TomlFields {
     const fs::path dofs = Resolve(String(Require(t, "dofs", "[fe]"), "dofs"));
     for (const char* key : {"mass", "stiffness", "dofs"}) {
       const fs::path f = Resolve(String(*t.get(key), key));
-      if (!fs::exists(f)) throw InputError(At(*t.get(key)), "[fe] " + std::string(key) + ": file '" + f.string() + "' not found");
+      std::error_code ec;  // an unusable name (too long, ...) is "not found", not a filesystem_error
+      if (!fs::exists(f, ec)) throw InputError(At(*t.get(key)), "[fe] " + std::string(key) + ": file '" + f.string() + "' not found");
     }
     m->fe.mass = ReadMatrixMarket(mass);
     m->fe.stiffness = ReadMatrixMarket(stiffness);
@@ -461,7 +462,8 @@ std::string Array(const std::vector<double>& v) {
 }  // namespace
 
 model::Model ReadModelFile(const std::filesystem::path& path) {
-  if (!std::filesystem::exists(path)) throw InputError(path.string(), "model file not found");
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path.string(), "model file not found");
   return Reader(path).Read();
 }
 
