@@ -79,10 +79,15 @@ void RefuseOutputsOverInputs(const std::vector<PathArg>& inputs, const std::vect
     if (out.path.empty()) continue;
     for (const auto& [in, file] : all) {
       if (!SameFile(out.path, file)) continue;
-      std::string what = "the input " + Named(in);
-      if (file != fs::path(in.path)) what = "'" + file.string() + "', which the input " + Named(in) + " names";
-      throw UsageError(Named(out) + ": refused, it would replace " + what +
-                       " (outputs never replace inputs: choose another output name)");
+      // Built by append: GCC 12 warns (-Wrestrict, a false positive) on "literal" + std::string&&.
+      std::string message = Named(out);
+      message.append(": refused, it would replace ");
+      if (file != fs::path(in.path)) message.append("'").append(file.string()).append("', which the input ");
+      else message.append("the input ");
+      message.append(Named(in));
+      if (file != fs::path(in.path)) message.append(" names");
+      message.append(" (outputs never replace inputs: choose another output name)");
+      throw UsageError(message);
     }
     for (std::size_t j = 0; j < i; ++j)
       if (!outputs[j].path.empty() && SameFile(out.path, outputs[j].path))
