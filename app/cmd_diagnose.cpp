@@ -183,6 +183,7 @@ int RunDiagnose(const std::vector<std::string>& args) {
               << diagnose::PriorDefaultsText();
     return 0;
   }
+  cli::RefuseOutputsOverInputs(vm, {"model", "test", "force-level"}, {"json", "output"});
   if (!diagnose::StringToCriterion(criterion, &dopt.criterion))
     throw UsageError("--criterion must be evidence, bic or aicc, got '" + criterion + "'");
   if (no_pairs) dopt.max_effects = 1;
