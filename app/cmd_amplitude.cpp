@@ -48,6 +48,7 @@ int RunAmplitude(const std::vector<std::string>& args) {
   po::positional_options_description positional;
   po::variables_map vm;
   if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  cli::RefuseOutputsOverInputs(vm, {"level"}, {"json", "report"});
   correlation::LevelKind kind;
   if (!correlation::StringToLevelKind(kind_name, &kind))
     throw UsageError("--level-kind: expected peak_force, rms_force or response, got '" + kind_name + "'");
@@ -56,14 +57,6 @@ int RunAmplitude(const std::vector<std::string>& args) {
   if (level_args.size() < 2)
     throw InputError("ema amplitude", "needs mode sets from at least two levels (--level F=MODES.unv twice or more), got " +
                                           std::to_string(level_args.size()));
-  for (const auto& [option, out] : {std::pair<std::string, std::string>{"--json", json_path}, {"--report", report_path}}) {
-    if (out.empty()) continue;
-    std::error_code ec;
-    for (const std::string& path : app::AmplitudeLevelFiles(level_args))
-      if (std::filesystem::path(out) == std::filesystem::path(path) ||
-          (std::filesystem::exists(out, ec) && std::filesystem::equivalent(out, path, ec)))
-        throw UsageError(option + " " + out + " names an input file");
-  }
   std::vector<correlation::AmplitudeLevel> levels = app::ReadAmplitudeLevels(level_args, "--level");
   const correlation::AmplitudeResult r = correlation::AnalyseAmplitude(std::move(levels), kind, ao);
 

@@ -292,11 +292,6 @@ int RunFrf(const std::vector<std::string>& args) {
   }
 
   std::vector<acquisition::RecordSet> sets;
-  for (const std::string& path : inputs) {
-    for (const auto& s : sets)
-      if (s.name == path) throw UsageError("file given twice: " + path);
-    sets.push_back({path, formats::ReadTimeRecords(path)});
-  }
   if (vm.count("force-bins") && !force_bin_edges.empty()) throw UsageError("give --force-bins or --force-bin-edges, not both");
   if (vm.count("force-bins") && force_bins < 1) throw UsageError("--force-bins: expected a positive number of bins");
   std::vector<double> edges;
@@ -307,6 +302,19 @@ int RunFrf(const std::vector<std::string>& args) {
     if (edges.size() < 2) throw UsageError("--force-bin-edges: expected at least two edges a,b[,c...] in N");
     for (std::size_t i = 1; i < edges.size(); ++i)
       if (!(edges[i] > edges[i - 1])) throw UsageError("--force-bin-edges: edges must increase");
+  }
+  // The bin files are outputs too: none may replace an input (cli.md).
+  const std::size_t bin_count = force_bins > 0 ? static_cast<std::size_t>(force_bins) : edges.empty() ? 0 : edges.size() - 1;
+  if (bin_count > 0) {
+    std::vector<cli::PathArg> in_args, bin_args;
+    for (const std::string& path : inputs) in_args.push_back({"input", path});
+    for (std::size_t b = 0; b < bin_count; ++b) bin_args.push_back({"-o (bin " + std::to_string(b + 1) + ")", BinPath(output, b)});
+    cli::RefuseOutputsOverInputs(in_args, bin_args);
+  }
+  for (const std::string& path : inputs) {
+    for (const auto& s : sets)
+      if (s.name == path) throw UsageError("file given twice: " + path);
+    sets.push_back({path, formats::ReadTimeRecords(path)});
   }
   if (force_bins > 0 || !edges.empty()) return RunFrfBins(sets, opt, output, json_path, binary, force_bins, edges);
   const acquisition::HammerTest test = acquisition::AssembleHammerTest(std::move(sets));

@@ -158,7 +158,8 @@ struct TestFiles {
 std::vector<cli::PathArg> RunOutputs(const fs::path& out, const app::Project& project) {
   std::vector<cli::PathArg> o = {{"-o", out.string()}};
   auto add = [&](const fs::path& p) { o.push_back({"-o", p.string()}); };
-  for (const char* name : {"diagnosis.json", "updated-model.toml", "report.html", "summary.txt"}) add(out / name);
+  for (const char* name : {"diagnosis.json", "updated-model.toml", "report.html", "summary.txt", "history.json"})
+    add(out / name);
   add(out / "logs" / "diagnose.txt");
   for (const app::ProjectTest& test : project.tests) {
     const TestFiles f(out / test.name);

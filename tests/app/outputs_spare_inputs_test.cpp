@@ -140,6 +140,23 @@ TEST_F(OutputsSpareInputs, Diagnose) {
   ExpectRefused("diagnose carriage.toml --test modes.unv -o film25.csv", "-o film25.csv", "film25.csv");
 }
 
+TEST_F(OutputsSpareInputs, DiagnoseForceLevels) {
+  ExpectRefused("diagnose carriage.toml --test modes.unv --force-level 10=modes.unv --force-level 20=modes.csv --json modes.csv",
+                "--json modes.csv", "modes.csv");
+}
+
+TEST_F(OutputsSpareInputs, Amplitude) {
+  ExpectRefused("amplitude --level 10=modes.unv --level 20=modes.csv --json modes.unv", "--json modes.unv", "modes.unv");
+  ExpectRefused("amplitude --level 10=modes.unv --level 20=modes.csv --report ./modes.csv", "--report ./modes.csv", "modes.csv");
+}
+
+TEST_F(OutputsSpareInputs, FrfForceBins) {
+  // The bin files FRF.binK.unv are outputs too: -o frf.unv with 2 bins writes frf.bin2.unv.
+  fs::copy_file(dir_ / "time2.unv", dir_ / "frf.bin2.unv");
+  ExpectRefused("frf time.unv frf.bin2.unv -o frf.unv --force-bins 2", "frf.bin2.unv", "frf.bin2.unv");
+  ExpectRefused("frf time.unv frf.bin2.unv -o frf.unv --force-bin-edges 10,50,200", "frf.bin2.unv", "frf.bin2.unv");
+}
+
 TEST_F(OutputsSpareInputs, Simulate) {
   ExpectRefused("simulate carriage.toml --plan plan.toml -o plan.toml", "-o plan.toml", "plan.toml");
   ExpectRefused("simulate carriage.toml --plan plan.toml -o carriage.toml", "-o carriage.toml", "carriage.toml");
