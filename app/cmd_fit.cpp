@@ -44,6 +44,7 @@ nlohmann::json ModesJson(const ModeSet& set, const curvefit::FitResult& fit) {
                         {"damping_ratio", m.damping_ratio},
                         {"mpc", NumberOrNull(m.mpc)},
                         {"mpd_deg", NumberOrNull(m.mpd)},
+                        {"mcf", NumberOrNull(m.mcf)},
                         {"pole", Complex(m.pole)},
                         {"frequency_spread_hz", NumberOrNull(m.frequency_spread_hz)},
                         {"damping_spread", NumberOrNull(m.damping_spread)},
