@@ -10,6 +10,7 @@
 #include "ema/curvefit/fit.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
+#include "mode_indicators_json.hpp"
 #include "plot_stabilisation.hpp"
 
 namespace ema {
@@ -178,8 +179,11 @@ int RunFit(const std::vector<std::string>& args) {
   fit.modes.source = input;
   formats::WriteModeSet(output, fit.modes);
   if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, ModesJson(fit.modes, fit).dump(2) + "\n");
-  if (!stab_path.empty())
-    formats::WriteTextFileAtomically(stab_path, StabilisationJson(fit, fit_options.stability).dump(1) + "\n");
+  if (!stab_path.empty()) {
+    nlohmann::json stab = StabilisationJson(fit, fit_options.stability);
+    AddModeIndicatorsJson(&stab, frfs, fit_options.data, input);  // CMIF/MMIF (docs/quality.md)
+    formats::WriteTextFileAtomically(stab_path, stab.dump(1) + "\n");
+  }
   if (!plot_path.empty()) PlotStabilisation(plot_path, fit.diagram, fit.selected);
 
   std::cout << fit.modes.modes.size() << " mode(s) from " << input << " ("

@@ -86,3 +86,43 @@ TEST(QualityCli, VerdictsAndNumbersInJson) {
 
 }  // namespace
 }  // namespace ema
+
+namespace ema {
+namespace {
+
+TEST(QualityCli, StabilisationJsonCarriesCmifAndMmif) {
+  // Two close modes (100/102 Hz, 2 %) with orthogonal participation at the two references, as in
+  // tests/curvefit/mode_indicators_test.cpp, through `ema fit --stabilisation`.
+  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "quality_cli_cmif";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto truth = curvefit::test::MakeTruth({40.0, 100.0, 102.0}, {0.01, 0.02, 0.02}, 6);
+  truth.modes[1].shape << 0.5, 0.5, 0.25, 0.4, 0.15, 0.3;
+  truth.modes[2].shape << 0.3, -0.3, 0.21, -0.12, 0.27, -0.06;
+  formats::WriteFrfSet(dir / "frf.unv", curvefit::test::MakeFrfSet(truth, {0, 1}, 150.0, 0.1, 0.0, 1));
+  std::string out;
+  ASSERT_EQ(RunEmaQuality("fit \"" + (dir / "frf.unv").string() + "\" -o \"" + (dir / "m.unv").string() +
+                              "\" --band 20:140 --order-max 20 --stabilisation \"" + (dir / "s.json").string() + "\"",
+                          dir, &out),
+            0)
+      << out;
+  std::ifstream in(dir / "s.json");
+  const auto j = nlohmann::json::parse(in);
+  const auto& f = j.at("cmif").at("frequency_hz");
+  const auto& sv = j.at("cmif").at("values");
+  ASSERT_EQ(sv.size(), 2u);  // min(6 outputs, 2 references) singular values
+  ASSERT_EQ(sv[1].size(), f.size());
+  ASSERT_EQ(j.at("mmif").at("values").size(), 2u);
+  // Largest second singular value between 95 and 110 Hz: at the weaker close mode (102 Hz, the
+  // peak line on a 0.1 Hz grid within 0.3 Hz).
+  double best = -1.0, at = 0.0;
+  for (size_t k = 0; k < f.size(); ++k) {
+    const double hz = f[k].get<double>();
+    if (hz < 95.0 || hz > 110.0 || sv[1][k].is_null()) continue;
+    if (sv[1][k].get<double>() > best) best = sv[1][k].get<double>(), at = hz;
+  }
+  EXPECT_NEAR(at, 102.0, 0.3);
+}
+
+}  // namespace
+}  // namespace ema
