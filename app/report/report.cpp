@@ -7,6 +7,7 @@
 #include <map>
 
 #include "embedded_assets.hpp"
+#include "report_quality.hpp"
 
 namespace ema::report {
 
@@ -217,6 +218,8 @@ json BuildReportData(const ReportInput& input) {
     json s = {{"name", setup.name}};
     s["band_hz"] = {setup.band_lo_hz, setup.band_hi_hz};
     s["stabilisation"] = StabilisationData(setup);
+    s["mode_indicators"] = ModeIndicatorData(setup.stabilisation);
+    s["quality"] = QualityData(setup.quality, setup.test_modes);
     json selected = json::array();
     for (double f : test.frequency_hz) selected.push_back(Round(f));
     s["selected_hz"] = selected;

@@ -164,8 +164,9 @@ TEST_F(GuidewayRun, ReportRendersInHeadlessChromium) {
   ASSERT_TRUE(r.ran);
   EXPECT_EQ(r.page_errors, "");
   EXPECT_EQ(r.console_errors, "");
-  // Per test: stabilisation, FRFs, 2 MAC matrices, mode shapes; then the ranking and the error fall.
-  EXPECT_EQ(r.expected, 2 * 5 + 2);
+  // Per test: coherence map, stabilisation, FRFs, 2 MAC matrices, mode shapes; then the ranking
+  // and the error fall.
+  EXPECT_EQ(r.expected, 2 * 6 + 2);
   EXPECT_EQ(r.rendered, r.expected);
   EXPECT_EQ(r.rendered_divs, r.expected);
 }
