@@ -153,8 +153,12 @@ DrivingPointCheck CheckDrivingPoint(const Entry& e, const Eigen::VectorXd& f, do
   c.sign_consistency = den > 0.0 ? num / den : kNaN;
   for (int k = 1; k + 1 < n; ++k) {
     if (!(mag[k] > mag[k - 1] && mag[k] >= mag[k + 1] && mag[k] >= level * top)) continue;
+    // A resonance peak is in quadrature (|signed part| ~ |H|, either sign); noise peaks with a
+    // random phase are not resonances and are not judged.
+    const double p = SignedPart(e.h[k], e.quantity);
+    if (std::abs(p) < 0.7 * mag[k]) continue;
     ++c.resonances;
-    if (SignedPart(e.h[k], e.quantity) < 0.0) {
+    if (p < 0.0) {
       ++c.flipped;
       c.flipped_frequencies_hz.push_back(f[k]);
     }

@@ -29,7 +29,7 @@ struct QualityOptions {
   /// stays at or below this (0.05 = 5 %; noise of a good hammer test gives 1-3 %).
   double reciprocity_tolerance = 0.05;
   /// Driving point: a resonance is a local maximum of |H| above this fraction of the FRF's
-  /// largest |H| in the band.
+  /// largest |H| in the band, in quadrature (|Im A| >= 0.7 |A|: phase within ~45 deg of +-90).
   double resonance_level = 0.1;
   /// Coherence: an FRF passes when the fraction of band lines with coherence below
   /// coherence_min stays at or below coherence_max_low_fraction (anti-resonances are expected
