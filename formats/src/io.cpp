@@ -114,6 +114,7 @@ std::vector<TimeRecord> ReadTimeRecords(const std::filesystem::path& path) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw InputError(path.string(), "no such file");
     if (std::filesystem::file_size(path, ec) == 0) throw InputError(path.string(), "empty file");
+    if (LooksLikeMat(path)) return ReadMatTimeRecords(path);
     return ReadCsvTimeRecords(path);
   }
   uff::Reader reader(path);
