@@ -21,6 +21,8 @@
 #include "ema/curvefit/fit.hpp"
 #include "ema/curvefit/mode_indicators.hpp"
 #include "ema/formats/io.hpp"
+#include "ema/formats/model_file.hpp"
+#include "ema/model/solve.hpp"
 #include "ema/frf/hammer_frf.hpp"
 #include "ema/frf/quality.hpp"
 #include "quality_json.hpp"
@@ -323,6 +325,22 @@ PYBIND11_MODULE(ema, m) {
       py::arg("frfs"), py::arg("band") = py::none(),
       "CMIF (singular values of the FRF matrix per line, largest first: (n_lines, min(outputs, references)))\n"
       "and MMIF (eigenvalues of the real-part energy ratio, smallest first: (n_lines, references)) in the band.");
+
+  m.def(
+      "model_modes",
+      [](const std::string& path, const std::string& setup, int max_modes) {
+        const ema::model::Model model = ema::formats::ReadModelFile(path);
+        ema::model::SolveOptions opt;
+        opt.setup = setup;
+        opt.max_modes = max_modes;
+        py::gil_scoped_release release;
+        ModeSet modes = ema::model::Solve(model, opt).modes;
+        py::gil_scoped_acquire acquire;
+        return ModesDict(modes);
+      },
+      py::arg("model"), py::arg("setup") = "", py::arg("max_modes") = 0,
+      "The model's own modes as `ema model` (a model file, docs/model.md), at the operating point of `setup`\n"
+      "(empty: nominal), as a modes dict with the shapes at the model's test points.");
 
   m.def(
       "mac",
