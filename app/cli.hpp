@@ -43,4 +43,5 @@ int RunDiagnose(const std::vector<std::string>& args);
 int RunRun(const std::vector<std::string>& args);
 int RunSimulate(const std::vector<std::string>& args);
 int RunQuality(const std::vector<std::string>& args);
+int RunAmplitude(const std::vector<std::string>& args);
 }  // namespace ema

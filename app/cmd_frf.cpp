@@ -1,10 +1,14 @@
 // ema frf TIME.unv [TIME2.unv ...] -o FRF.unv [--estimator H1|H2|Hv] [--json SUMMARY.json] (cli.md):
 // hammer time records to FRFs + coherences (UFF 58), several files = several roving sets.
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
+#include <tuple>
 
 #include "cli.hpp"
 #include "ema/acquisition/hammer_test.hpp"
@@ -55,6 +59,151 @@ nlohmann::json SummaryJson(const frf::FrfResult& result) {
           {"notes", s.notes}};
 }
 
+/// One force-level bin of `ema frf --force-bins/--force-bin-edges`.
+struct ForceBin {
+  double lo = 0.0, hi = 0.0;          ///< peak-force limits of the bin, N
+  std::vector<double> peaks;          ///< peak forces of its impacts
+  std::vector<double> rms;            ///< RMS force over each impact's contact
+  std::set<std::tuple<std::size_t, int, int, int>> impacts;  ///< (file, reference node, dir, impact)
+};
+
+std::string BinPath(const std::string& output, std::size_t bin) {
+  std::filesystem::path p(output);
+  const std::string ext = p.extension().string();
+  p.replace_extension();
+  return p.string() + ".bin" + std::to_string(bin + 1) + (ext.empty() ? ".unv" : ext);
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return kNaN;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// Splits the impacts of every file by the peak of their force record: `count` bins of equal
+/// numbers of impacts (by rank of the peak force), or the bins between consecutive `edges`
+/// (impacts outside the first and last edge are left out).
+std::vector<ForceBin> MakeForceBins(const std::vector<acquisition::RecordSet>& sets, int count,
+                                    const std::vector<double>& edges, int* left_out) {
+  struct Peak {
+    double force;
+    std::tuple<std::size_t, int, int, int> key;
+    double rms = 0.0;  ///< over the contact: the samples around the peak above 10 % of it
+  };
+  std::vector<Peak> peaks;
+  for (std::size_t f = 0; f < sets.size(); ++f)
+    for (const TimeRecord& r : sets[f].records) {
+      if (r.quantity != Quantity::kForce) continue;
+      double peak = 0.0;
+      std::size_t at = 0;
+      for (std::size_t i = 0; i < r.samples.size(); ++i)
+        if (std::abs(r.samples[i]) > peak) peak = std::abs(r.samples[i]), at = i;
+      std::size_t lo = at, hi = at;
+      while (lo > 0 && std::abs(r.samples[lo - 1]) >= 0.1 * peak) --lo;
+      while (hi + 1 < r.samples.size() && std::abs(r.samples[hi + 1]) >= 0.1 * peak) ++hi;
+      double ss = 0.0;
+      for (std::size_t i = lo; i <= hi; ++i) ss += r.samples[i] * r.samples[i];
+      const double rms = r.samples.empty() ? 0.0 : std::sqrt(ss / static_cast<double>(hi - lo + 1));
+      peaks.push_back({peak, {f, r.reference.node, r.reference.direction, r.impact}, rms});
+    }
+  if (peaks.empty()) throw InputError(sets.front().name, "no force records (specific data type 13): nothing to bin by force");
+  std::sort(peaks.begin(), peaks.end(), [](const Peak& a, const Peak& b) { return a.force < b.force; });
+  std::vector<ForceBin> bins;
+  *left_out = 0;
+  if (count > 0) {
+    if (static_cast<std::size_t>(count) > peaks.size())
+      throw InputError(sets.front().name, "--force-bins " + std::to_string(count) + ": only " +
+                                              std::to_string(peaks.size()) + " impacts to share out");
+    bins.resize(static_cast<std::size_t>(count));
+    for (std::size_t i = 0; i < peaks.size(); ++i) {
+      ForceBin& b = bins[i * static_cast<std::size_t>(count) / peaks.size()];
+      b.peaks.push_back(peaks[i].force);
+      b.rms.push_back(peaks[i].rms);
+      b.impacts.insert(peaks[i].key);
+    }
+    for (ForceBin& b : bins) b.lo = b.peaks.front(), b.hi = b.peaks.back();
+  } else {
+    bins.resize(edges.size() - 1);
+    for (std::size_t i = 0; i + 1 < edges.size(); ++i) bins[i].lo = edges[i], bins[i].hi = edges[i + 1];
+    for (const Peak& p : peaks) {
+      bool placed = false;
+      for (std::size_t i = 0; i < bins.size() && !placed; ++i)
+        if (p.force >= bins[i].lo && (p.force < bins[i].hi || (i + 1 == bins.size() && p.force <= bins[i].hi))) {
+          bins[i].peaks.push_back(p.force);
+          bins[i].rms.push_back(p.rms);
+          bins[i].impacts.insert(p.key);
+          placed = true;
+        }
+      if (!placed) ++*left_out;
+    }
+    for (std::size_t i = 0; i < bins.size(); ++i)
+      if (bins[i].peaks.empty())
+        throw InputError(sets.front().name, "force bin " + std::to_string(i + 1) + " [" + std::to_string(bins[i].lo) +
+                                                ", " + std::to_string(bins[i].hi) + "] N holds no impact");
+  }
+  return bins;
+}
+
+int RunFrfBins(const std::vector<acquisition::RecordSet>& sets, const frf::FrfOptions& opt, const std::string& output,
+               const std::string& json_path, bool binary, int count, const std::vector<double>& edges) {
+  int left_out = 0;
+  const std::vector<ForceBin> bins = MakeForceBins(sets, count, edges, &left_out);
+  std::vector<frf::FrfResult> results;
+  for (std::size_t b = 0; b < bins.size(); ++b) {
+    std::vector<acquisition::RecordSet> subset;
+    for (std::size_t f = 0; f < sets.size(); ++f) {
+      acquisition::RecordSet part{sets[f].name, {}};
+      for (const TimeRecord& r : sets[f].records)
+        if (bins[b].impacts.count({f, r.reference.node, r.reference.direction, r.impact})) part.records.push_back(r);
+      if (!part.records.empty()) subset.push_back(std::move(part));
+    }
+    const acquisition::HammerTest test = acquisition::AssembleHammerTest(std::move(subset));
+    results.push_back(frf::EstimateFrfs(test, opt, [&](double f, std::string_view stage) {
+      cli::DrawProgress((static_cast<double>(b) + f) / bins.size(), std::string(stage));
+    }));
+  }
+  cli::DrawProgress(1.0, "");
+  // Nothing is written unless every bin succeeded.
+  formats::WriteOptions write_options;
+  write_options.binary = binary;
+  nlohmann::json all_frfs = nlohmann::json::array(), bin_json = nlohmann::json::array();
+  std::cout << bins.size() << " force-level bin(s) by peak force";
+  if (left_out > 0) std::cout << " (" << left_out << " impact(s) outside the edges left out)";
+  std::cout << "\n";
+  for (std::size_t b = 0; b < bins.size(); ++b) {
+    const std::string path = BinPath(output, b);
+    formats::WriteFrfSet(path, results[b].frfs, write_options);
+    nlohmann::json summary = SummaryJson(results[b]);
+    for (auto& e : summary["frfs"]) {
+      e["bin"] = b + 1;
+      all_frfs.push_back(e);
+    }
+    const double median = Median(bins[b].peaks);
+    bin_json.push_back({{"bin", b + 1},
+                        {"file", path},
+                        {"level_kind", "peak_force"},
+                        {"level", median},
+                        {"peak_force_n", median},
+                        {"rms_force_n", Median(bins[b].rms)},
+                        {"peak_force_min_n", *std::min_element(bins[b].peaks.begin(), bins[b].peaks.end())},
+                        {"peak_force_max_n", *std::max_element(bins[b].peaks.begin(), bins[b].peaks.end())},
+                        {"lower_edge_n", bins[b].lo},
+                        {"upper_edge_n", bins[b].hi},
+                        {"impacts", bins[b].peaks.size()},
+                        {"summary", summary}});
+    std::cout << "  bin " << b + 1 << ": " << bins[b].peaks.size() << " impact(s), peak force " << bins[b].peaks.front()
+              << " to " << bins[b].peaks.back() << " N (median " << median << " N), "
+              << results[b].summary.frfs.size() << " FRF(s) -> " << path << "\n";
+  }
+  if (!json_path.empty())
+    formats::WriteTextFileAtomically(json_path,
+                                     nlohmann::json{{"frfs", all_frfs}, {"bins", bin_json}, {"left_out_impacts", left_out}}
+                                             .dump(2) +
+                                         "\n");
+  return 0;
+}
+
 }  // namespace
 
 int RunFrf(const std::vector<std::string>& args) {
@@ -70,6 +219,8 @@ int RunFrf(const std::vector<std::string>& args) {
   frf::FrfOptions opt;
   acquisition::ImpactOptions& imp = opt.impact;
   bool accept_double_hits = false, binary = false;
+  int force_bins = 0;
+  std::string force_bin_edges;
   options.add_options()
       ("input", po::value(&inputs)->required()->multitoken(), "time-data files (one per roving set)")
       ("output,o", po::value(&output)->required(), "FRFs out (UFF 58: function type 4 FRFs, type 6 coherences)")
@@ -91,7 +242,12 @@ int RunFrf(const std::vector<std::string>& args) {
       ("level-tolerance", po::value(&imp.level_tolerance),
        "reject impacts whose peak force is off the point's median by more than this fraction (default 0.5)")
       ("threads", po::value(&opt.threads), "threads for the transforms (default: all cores; results do not depend on it)")
-      ("binary", po::bool_switch(&binary), "write 58b (binary) records");
+      ("binary", po::bool_switch(&binary), "write 58b (binary) records")
+      ("force-bins", po::value(&force_bins),
+       "split the impacts into N force-level bins of equal counts by the peak of their force record, one FRF\n"
+       "set per bin: FRF.bin1.unv (lowest forces), FRF.bin2.unv, ...; levels listed in the JSON summary")
+      ("force-bin-edges", po::value(&force_bin_edges),
+       "as --force-bins with explicit peak-force edges in N, a,b,c: bins [a,b), [b,c]; impacts outside are left out");
   cli::AddHelp(&options);
   po::positional_options_description positional;
   positional.add("input", -1);
@@ -140,6 +296,18 @@ int RunFrf(const std::vector<std::string>& args) {
       if (s.name == path) throw UsageError("file given twice: " + path);
     sets.push_back({path, formats::ReadTimeRecords(path)});
   }
+  if (vm.count("force-bins") && !force_bin_edges.empty()) throw UsageError("give --force-bins or --force-bin-edges, not both");
+  if (vm.count("force-bins") && force_bins < 1) throw UsageError("--force-bins: expected a positive number of bins");
+  std::vector<double> edges;
+  if (!force_bin_edges.empty()) {
+    std::stringstream ss(force_bin_edges);
+    std::string item;
+    while (std::getline(ss, item, ',')) edges.push_back(ParseNumber(item, "--force-bin-edges"));
+    if (edges.size() < 2) throw UsageError("--force-bin-edges: expected at least two edges a,b[,c...] in N");
+    for (std::size_t i = 1; i < edges.size(); ++i)
+      if (!(edges[i] > edges[i - 1])) throw UsageError("--force-bin-edges: edges must increase");
+  }
+  if (force_bins > 0 || !edges.empty()) return RunFrfBins(sets, opt, output, json_path, binary, force_bins, edges);
   const acquisition::HammerTest test = acquisition::AssembleHammerTest(std::move(sets));
   const frf::FrfResult result =
       frf::EstimateFrfs(test, opt, [](double f, std::string_view stage) { cli::DrawProgress(f, std::string(stage)); });

@@ -7,15 +7,19 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <set>
 #include <toml++/toml.h>
 
 #include "cli.hpp"
 #include "ema/acquisition/simulator.hpp"
+#include "ema/acquisition/time_simulator.hpp"
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/model_file.hpp"
 #include "ema/formats/toml_fields.hpp"
+#include "ema/model/effects.hpp"
+#include "ema/model/law_force.hpp"
 #include "ema/model/solve.hpp"
 
 namespace ema {
@@ -31,6 +35,7 @@ struct Plan {
   acquisition::HammerTestPlan hammer;
   std::vector<RovingSet> sets;
   std::string setup;
+  bool time_integration = false;  ///< integration = "time": non-linear laws integrated in time
 };
 
 class PlanReader : public formats::TomlFields {
@@ -95,7 +100,7 @@ class PlanReader : public formats::TomlFields {
               {"references", "sample_rate_hz", "samples", "record_length_s", "pre_trigger", "impacts", "force_peak_n",
                "force_spread", "pulse_duration_s", "force_noise", "response_noise", "noise_relative_to_peak",
                "response", "sensor_mass", "seed", "trigger_jitter", "oversampling", "response_full_scale",
-               "force_full_scale", "setup"},
+               "force_full_scale", "setup", "force_levels_n", "integration"},
               "[plan]");
     Plan plan;
     auto& h = plan.hammer;
@@ -129,6 +134,22 @@ class PlanReader : public formats::TomlFields {
       else throw InputError(At(*r), "[plan]: response must be acceleration, velocity or displacement");
     }
     if (const toml::node* s = p->get("setup")) plan.setup = s->value<std::string>().value_or("");
+    if (const toml::node* levels = p->get("force_levels_n")) {
+      const toml::array* a = levels->as_array();
+      if (!a || a->empty()) throw InputError(At(*levels), "[plan]: force_levels_n must be a non-empty array of forces in N");
+      for (const toml::node& e : *a) {
+        if (!e.is_number() || !(*e.value<double>() > 0.0))
+          throw InputError(At(e), "[plan]: force_levels_n: expected forces > 0 in N");
+        h.force_levels_n.push_back(*e.value<double>());
+      }
+    }
+    if (const toml::node* integ = p->get("integration")) {
+      const std::string mode = integ->value<std::string>().value_or("");
+      if (mode == "time") plan.time_integration = true;
+      else if (mode != "modal")
+        throw InputError(At(*integ), "[plan]: integration must be \"modal\" (linearised, exact modal superposition) or "
+                                     "\"time\" (non-linear laws integrated in time)");
+    }
     const double default_mass = Number(*p, "sensor_mass", 0.0);
 
     if (root.get("set") && !root["set"].as_array()) throw InputError(At(*root.get("set")), "'set' must be [[set]] tables");
@@ -211,6 +232,125 @@ class PlanReader : public formats::TomlFields {
   }
 };
 
+/// A model law as the time integrator's restoring force.
+class LawRestoringForce : public acquisition::RestoringForce {
+ public:
+  explicit LawRestoringForce(model::LawForce law) : law_(std::move(law)) {}
+  double Force(double c) const override { return law_.Force(c); }
+  void Commit(double c) override { law_.Commit(c); }
+  void Reset() override { law_.Reset(); }
+  double Stiffness() const override { return law_.Stiffness(); }
+
+ private:
+  model::LawForce law_;
+};
+
+/// integration = "time": per roving set the model (with that set's sensor masses) is assembled
+/// at its operating point; every spring whose law is non-linear in time becomes a non-linear
+/// element about that point; impacts are integrated in time (docs/plan-format.md).
+int SimulateInTime(const model::Model& input, const Plan& plan, const std::string& model_path,
+                   const std::string& plan_path, const std::string& out_path, bool binary) {
+  const model::Model m = input.effects.empty() ? input : model::ApplyEffects(input);
+  std::map<int, const model::TestPoint*> points;
+  for (const model::TestPoint& p : m.points) points[p.id] = &p;
+  const std::vector<double> levels =
+      plan.hammer.force_levels_n.empty() ? std::vector<double>{plan.hammer.force_peak_n} : plan.hammer.force_levels_n;
+  const double peak_max = *std::max_element(levels.begin(), levels.end()) * (1.0 + std::abs(plan.hammer.force_spread));
+  const double impulse = 2.0 * plan.hammer.pulse_duration_s / 3.14159265358979323846 * peak_max;
+  std::vector<acquisition::ImpactFunction> impact;
+  std::vector<std::shared_ptr<acquisition::TimeIntegrator>> integrators;
+  int nonlinear = 0;
+  for (std::size_t s = 0; s < plan.sets.size(); ++s) {
+    const RovingSet& set = plan.sets[s];
+    model::SolveOptions so;
+    so.setup = plan.setup;
+    for (const auto& [id, mass] : set.masses) {
+      if (!points.count(id)) throw InputError(plan_path, "set '" + set.name + "': mass at unknown point " + std::to_string(id));
+      if (mass > 0.0) so.extra_masses.push_back({"sensor@" + std::to_string(id), points[id]->where, mass, 0});
+    }
+    const model::System sys = model::Assemble(m, so);
+    const model::Solution sol = model::Solve(m, so);  // linear modes: the range of each element's motion
+    acquisition::TimeDomainTruth truth;
+    truth.mass = Eigen::MatrixXd(sys.mass);
+    truth.stiffness = Eigen::MatrixXd(sys.stiffness);
+    const int n = static_cast<int>(truth.mass.rows());
+    if (n > 600)
+      throw InputError(model_path, "integration = \"time\" integrates dense matrices: " + std::to_string(n) +
+                                       " DOFs is too many (600 at most); use integration = \"modal\"");
+    for (std::size_t j = 0; j < sol.modes.modes.size(); ++j) truth.damping_ratios.push_back(sol.modes.modes[j].damping_ratio);
+    std::vector<Dof> dofs = plan.hammer.references;
+    for (const Dof& d : set.sensors)
+      if (std::find(dofs.begin(), dofs.end(), d) == dofs.end()) dofs.push_back(d);
+    truth.dofs = dofs;
+    truth.observation = Eigen::MatrixXd::Zero(static_cast<int>(dofs.size()), n);
+    const Eigen::MatrixXd obs(sys.observation);
+    Eigen::MatrixXd ref_shapes(static_cast<int>(plan.hammer.references.size()), sol.full_shapes.cols());
+    for (std::size_t i = 0; i < dofs.size(); ++i) {
+      const Dof base{dofs[i].node, std::abs(dofs[i].direction)};
+      const auto it = std::find(sys.observed_dofs.begin(), sys.observed_dofs.end(), base);
+      if (it == sys.observed_dofs.end())
+        throw InputError(plan_path, "DOF " + DofName(dofs[i]) + " is not a test point of the model " + model_path);
+      const double sign = dofs[i].direction < 0 ? -1.0 : 1.0;
+      truth.observation.row(static_cast<int>(i)) = sign * obs.row(static_cast<int>(it - sys.observed_dofs.begin()));
+      if (i < plan.hammer.references.size())
+        ref_shapes.row(static_cast<int>(i)) = truth.observation.row(static_cast<int>(i)) * sol.full_shapes;
+    }
+    for (std::size_t k = 0; k < m.springs.size(); ++k) {
+      const model::Spring& spring = m.springs[k];
+      if (!spring.law.IsNonlinearInTime()) continue;
+      Eigen::VectorXd coefficients = Eigen::VectorXd::Zero(n);
+      for (const auto& [dof, c] : sys.spring_coefficients[k]) coefficients[dof] -= c;  // compression = -deflection
+      // Range of its compression: 3 x the largest modal response to the largest impulse.
+      double range = 0.0;
+      const Eigen::RowVectorXd modal = coefficients.transpose() * sol.full_shapes;
+      for (Eigen::Index r = 0; r < modal.size(); ++r) {
+        const double w = kTwoPi * sol.modes.modes[static_cast<std::size_t>(r)].frequency_hz;
+        double drive = 0.0;
+        for (Eigen::Index i = 0; i < ref_shapes.rows(); ++i) drive = std::max(drive, std::abs(ref_shapes(i, r)));
+        if (w > 0.0) range += std::abs(modal[r]) * drive * impulse / w;
+      }
+      range = std::max(3.0 * range, 1e-9);
+      const std::string where = m.Where(spring.line) + ": spring '" + spring.name + "'";
+      double override_value = kNaN;
+      for (const model::Setup& setup : m.setups)
+        if (setup.name == plan.setup) {
+          const auto it = setup.operating.find(spring.group);
+          if (it != setup.operating.end() && spring.law.IsNonlinear()) override_value = it->second;
+        }
+      const model::SpringState op = model::LinearizeLaw(spring.law, where, override_value);
+      acquisition::NonlinearElement element;
+      element.coefficients = coefficients;
+      element.force = std::make_shared<LawRestoringForce>(
+          model::LawForce(spring.law, op, range, spring.stiffness_factor, where));
+      truth.elements.push_back(std::move(element));
+    }
+    nonlinear = static_cast<int>(truth.elements.size());
+    auto integrator = std::make_shared<acquisition::TimeIntegrator>(std::move(truth));
+    integrators.push_back(integrator);
+    const acquisition::HammerTestPlan& h = plan.hammer;
+    impact.push_back([integrator, &h](const Dof& ref, const std::vector<Dof>& responses,
+                                      const std::vector<std::pair<double, double>>& pulses) {
+      return integrator->Simulate(ref, responses, pulses, h.pulse_duration_s, h.sample_rate_hz, h.samples_per_record,
+                                  h.response_quantity, h.oversampling);
+    });
+    cli::DrawProgress(static_cast<double>(s + 1) / (plan.sets.size() + 1), "assembling set " + set.name);
+  }
+  std::vector<TimeRecord> records;
+  try {
+    records = acquisition::SimulateHammerTestWith(impact, plan.hammer);
+  } catch (const std::runtime_error& e) {
+    throw InputError(plan_path, e.what());
+  }
+  formats::WriteOptions wo;
+  wo.binary = binary;
+  formats::WriteTimeRecords(out_path, records, wo);
+  cli::DrawProgress(1.0, "done");
+  std::cout << "simulated " << records.size() << " records in time (" << nonlinear << " non-linear element(s)): "
+            << plan.sets.size() << " roving set(s), " << plan.hammer.references.size() << " reference(s), "
+            << plan.hammer.impacts_per_reference << " impacts each at " << levels.size() << " force level(s)\n";
+  return 0;
+}
+
 }  // namespace
 
 int RunSimulate(const std::vector<std::string>& args) {
@@ -243,6 +383,8 @@ int RunSimulate(const std::vector<std::string>& args) {
                                       " is not a [[point]] of the model " + model_path);
   };
   for (const Dof& r : plan.hammer.references) require_point(r, "reference");
+
+  if (plan.time_integration) return SimulateInTime(m, plan, model_path, plan_path, out_path, vm["binary"].as<bool>());
 
   std::vector<acquisition::ModalTruth> truths;
   for (std::size_t s = 0; s < plan.sets.size(); ++s) {
@@ -283,7 +425,8 @@ int RunSimulate(const std::vector<std::string>& args) {
   cli::DrawProgress(1.0, "done");
   std::cout << "simulated " << records.size() << " records: " << plan.sets.size() << " roving set(s), "
             << plan.hammer.references.size() << " reference(s), " << plan.hammer.impacts_per_reference
-            << " impacts each, " << truths.front().poles.size() << " modes\n";
+            << " impacts each" << (plan.hammer.force_levels_n.empty() ? "" : " per force level") << ", "
+            << truths.front().poles.size() << " modes\n";
   return 0;
 }
 

@@ -25,6 +25,7 @@ const Command kCommands[] = {
     {"diagnose", ema::RunDiagnose, "rank the physical effects the model is missing"},
     {"run", ema::RunRun, "the whole story from a project file, with an HTML report"},
     {"simulate", ema::RunSimulate, "a roving hammer test of a model, as UFF 58 time data"},
+    {"amplitude", ema::RunAmplitude, "does a mode depend on the excitation level? f and damping vs level"},
 };
 
 void PrintUsage(std::ostream& out) {

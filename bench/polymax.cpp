@@ -59,7 +59,10 @@ void BM_PolymaxFit(benchmark::State& state) {
   static const FrfSet data = BenchmarkData();
   ema::curvefit::FitOptions options;
   options.polymax.order_max = 80;
-  options.polymax.threads = static_cast<int>(state.range(0));
+  options.polymax.threads = options.ml.threads = static_cast<int>(state.range(0));
+  // Arg 2 (refine): 0 = the issue-4 pipeline (PolyMAX, selection, LSFD; sigma only), 1 = with the
+  // ML refinement of issue 18.
+  options.refine = state.range(1) ? ema::curvefit::RefineMethod::kMl : ema::curvefit::RefineMethod::kNone;
   ema::curvefit::FitResult fit;
   for (auto _ : state) {
     fit = ema::curvefit::Fit(data, options);
@@ -72,10 +75,12 @@ void BM_PolymaxFit(benchmark::State& state) {
   state.counters["solve_eig_wall_s"] = t.polymax.solve_and_eigen_wall;
   state.counters["selection_cpu_s"] = t.stabilisation_and_selection;
   state.counters["lsfd_cpu_s"] = t.lsfd;
+  state.counters["refine_cpu_s"] = t.refine;  // caller's thread only (all of it with 1 thread)
+  state.counters["refine_wall_s"] = t.refine_wall;
   state.counters["modes"] = static_cast<double>(fit.modes.modes.size());
 }
-BENCHMARK(BM_PolymaxFit)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
-BENCHMARK(BM_PolymaxFit)->Arg(1)->Unit(benchmark::kMillisecond)->MinTime(2.0);  // CPU-time view
+BENCHMARK(BM_PolymaxFit)->Args({1, 0})->Args({2, 0})->Args({1, 1})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_PolymaxFit)->Args({1, 0})->Args({1, 1})->Unit(benchmark::kMillisecond)->MinTime(2.0);  // CPU-time view
 
 /// The bare cost of the same eigenproblems: real nonsymmetric eigenvalues of random dense
 /// matrices of sizes 3p, p = 1..80 (what any companion-matrix method must pay), one thread.

@@ -70,8 +70,10 @@ BigFile& File() {
 void BM_ReadAscii58(benchmark::State& state) {
   const BigFile& file = File();
   std::uint64_t values = 0;
+  uff::ReadOptions options;
+  if (state.range(0) == 0) options.parallel_min_bytes = 0;  // Arg 0: one thread; 1: default (two threads)
   for (auto _ : state) {
-    uff::Reader reader(file.path());
+    uff::Reader reader(file.path(), options);
     uff::Dataset d;
     while (reader.Next(&d)) values += std::get<uff::Function58>(d.body).y.size();
     benchmark::DoNotOptimize(values);
@@ -79,7 +81,7 @@ void BM_ReadAscii58(benchmark::State& state) {
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * file.bytes()));
   state.counters["file_MB"] = static_cast<double>(file.bytes()) / 1e6;
 }
-BENCHMARK(BM_ReadAscii58)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
+BENCHMARK(BM_ReadAscii58)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
 
 void BM_HeaderScanAscii58(benchmark::State& state) {
   const BigFile& file = File();

@@ -171,7 +171,7 @@ FrfSet ToFrfSet(const py::object& o) {
 
 py::dict ModesDict(const ModeSet& set) {
   const size_t n = set.modes.size();
-  std::vector<double> f(n), z(n), mpc(n), mpd(n), mcf(n);
+  std::vector<double> f(n), z(n), mpc(n), mpd(n), mcf(n), f_std(n), z_std(n);
   Eigen::MatrixXcd shapes(static_cast<Eigen::Index>(set.dofs.size()), static_cast<Eigen::Index>(n));
   py::array_t<std::complex<double>> poles(n);
   for (size_t r = 0; r < n; ++r) {
@@ -181,12 +181,16 @@ py::dict ModesDict(const ModeSet& set) {
     mpc[r] = m.mpc;
     mpd[r] = m.mpd;
     mcf[r] = m.mcf;
+    f_std[r] = m.frequency_std_hz;
+    z_std[r] = m.damping_ratio_std;
     poles.mutable_data()[r] = m.pole;
     if (m.shape.size() == shapes.rows()) shapes.col(static_cast<Eigen::Index>(r)) = m.shape;
   }
   py::dict d;
   d["frequency_hz"] = Vec(f);
   d["damping_ratio"] = Vec(z);
+  d["frequency_std_hz"] = Vec(f_std);
+  d["damping_ratio_std"] = Vec(z_std);
   d["pole"] = poles;
   d["mpc"] = Vec(mpc);
   d["mpd_deg"] = Vec(mpd);
@@ -279,7 +283,7 @@ PYBIND11_MODULE(ema, m) {
   m.def(
       "fit",
       [](const py::object& frfs, const py::object& band, int order_max, const std::vector<double>& select,
-         const std::string& method) {
+         const std::string& method, const std::string& refine) {
         const FrfSet set = ToFrfSet(frfs);
         ema::curvefit::FitOptions opt;
         std::tie(opt.data.band_lo_hz, opt.data.band_hi_hz) = Band(band);
@@ -288,6 +292,8 @@ PYBIND11_MODULE(ema, m) {
         opt.select_frequencies_hz = select;
         if (method == "peak") opt.method = ema::curvefit::FitMethod::kPeak;
         else if (method != "polymax") throw py::value_error("method: expected 'polymax' or 'peak'");
+        if (!ema::curvefit::StringToRefineMethod(refine, &opt.refine))
+          throw py::value_error("refine: expected 'ml' or 'none', got '" + refine + "'");
         ema::curvefit::FitResult fit;
         {
           py::gil_scoped_release release;
@@ -304,10 +310,12 @@ PYBIND11_MODULE(ema, m) {
         return d;
       },
       py::arg("frfs"), py::arg("band") = py::none(), py::arg("order_max") = 0,
-      py::arg("select") = std::vector<double>{}, py::arg("method") = "polymax",
+      py::arg("select") = std::vector<double>{}, py::arg("method") = "polymax", py::arg("refine") = "ml",
       "Fits modes to FRFs as `ema fit`: PolyMAX poles for every order up to order_max (0 = automatic),\n"
-      "stabilisation, automatic selection (or the poles nearest the frequencies in `select`), LSFD shapes.\n"
-      "band=(lo, hi) in Hz. Returns a modes dict plus synthesis_error, order and cluster_orders.");
+      "stabilisation, automatic selection (or the poles nearest the frequencies in `select`), LSFD shapes,\n"
+      "and the maximum-likelihood refinement (refine='ml', the default; 'none' keeps PolyMAX/LSFD) with the\n"
+      "1-sigma frequency_std_hz and damping_ratio_std. band=(lo, hi) in Hz. Returns a modes dict plus\n"
+      "synthesis_error, order and cluster_orders.");
 
   m.def(
       "mode_indicators",

@@ -1,5 +1,7 @@
 #include "ema/acquisition/simulator.hpp"
 
+#include "antialias.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -11,45 +13,11 @@ namespace ema::acquisition {
 namespace {
 
 using cd = std::complex<double>;
-constexpr double kPi = 3.14159265358979323846;
+using internal::DesignAntiAlias;
+using internal::FilterDecimate;
+using internal::kPi;
 
 std::string Where(const Dof& dof) { return DofName(dof); }
-
-// Zero-phase low-pass FIR on the fine grid (Kaiser-windowed sinc), cut-off at half the output
-// Nyquist band edge: pass to 0.4 fs_out, stop from 0.6 fs_out (~80 dB), so nothing aliases
-// below 0.4 fs_out after decimation. Every channel gets the same filter, which cancels in H.
-std::vector<double> DesignAntiAlias(int oversampling) {
-  const int half = 16 * oversampling;
-  const double cutoff = 0.5 / oversampling;  // cycles per fine sample
-  const double beta = 7.86;                  // Kaiser beta for ~80 dB stop band
-  const double i0_beta = std::cyl_bessel_i(0.0, beta);
-  std::vector<double> h(2 * half + 1);
-  double sum = 0.0;
-  for (int k = -half; k <= half; ++k) {
-    const double x = 2.0 * cutoff * k;
-    const double sinc = k == 0 ? 1.0 : std::sin(kPi * x) / (kPi * x);
-    const double r = static_cast<double>(k) / half;
-    const double w = std::cyl_bessel_i(0.0, beta * std::sqrt(std::max(0.0, 1.0 - r * r))) / i0_beta;
-    h[k + half] = 2.0 * cutoff * sinc * w;
-    sum += h[k + half];
-  }
-  for (double& v : h) v /= sum;  // unit DC gain
-  return h;
-}
-
-// y[n] = sum_k h[k] x[n*os + half - k + half] with x indexed from fine time -half.
-template <typename T>
-std::vector<T> FilterDecimate(const std::vector<T>& fine, const std::vector<double>& h, int oversampling, int samples) {
-  const int taps = static_cast<int>(h.size());
-  std::vector<T> out(samples, T{});
-  for (int n = 0; n < samples; ++n) {
-    const T* x = fine.data() + static_cast<size_t>(n) * oversampling;  // fine index n*os - half .. n*os + half
-    T acc{};
-    for (int k = 0; k < taps; ++k) acc += h[k] * x[k];
-    out[n] = acc;
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -212,6 +180,21 @@ std::vector<SimulatedSet> SimulateHammerTestSets(const std::vector<ModalTruth>& 
   if (truth_per_set.empty()) throw std::invalid_argument("SimulateHammerTest: no modal truth");
   if (truth_per_set.size() != 1 && truth_per_set.size() != plan.roving_sets.size())
     throw std::invalid_argument("SimulateHammerTest: give one truth, or one per roving set");
+  std::vector<ImpactFunction> impact;
+  for (const ModalTruth& truth : truth_per_set)
+    impact.push_back([&truth, &plan](const Dof& ref, const std::vector<Dof>& responses,
+                                     const std::vector<std::pair<double, double>>& pulses) {
+      return SimulateImpact(truth, ref, responses, pulses, plan.pulse_duration_s, plan.sample_rate_hz,
+                            plan.samples_per_record, plan.response_quantity, plan.oversampling);
+    });
+  return SimulateHammerTestSetsWith(impact, plan);
+}
+
+std::vector<SimulatedSet> SimulateHammerTestSetsWith(const std::vector<ImpactFunction>& impact_per_set,
+                                                     const HammerTestPlan& plan) {
+  if (impact_per_set.empty()) throw std::invalid_argument("SimulateHammerTest: no structure to simulate");
+  if (impact_per_set.size() != 1 && impact_per_set.size() != plan.roving_sets.size())
+    throw std::invalid_argument("SimulateHammerTest: give one truth, or one per roving set");
   if (plan.references.empty() || plan.roving_sets.empty() || plan.impacts_per_reference < 1)
     throw std::invalid_argument("SimulateHammerTest: references, roving sets and impacts are required");
   std::mt19937_64 rng(plan.seed);
@@ -241,22 +224,25 @@ std::vector<SimulatedSet> SimulateHammerTestSets(const std::vector<ModalTruth>& 
     for (double& v : x) v = std::clamp(v, -fs, fs);
   };
 
+  const std::vector<double> levels = plan.force_levels_n.empty() ? std::vector<double>{plan.force_peak_n}
+                                                                  : plan.force_levels_n;
+  const int impacts = plan.impacts_per_reference * static_cast<int>(levels.size());
   std::vector<SimulatedSet> sets(plan.roving_sets.size());
   for (size_t s = 0; s < plan.roving_sets.size(); ++s) {
-    const ModalTruth& truth = truth_per_set.size() == 1 ? truth_per_set[0] : truth_per_set[s];
+    const ImpactFunction& simulate = impact_per_set.size() == 1 ? impact_per_set[0] : impact_per_set[s];
     const std::vector<Dof>& responses = plan.roving_sets[s];
     for (size_t ir = 0; ir < plan.references.size(); ++ir) {
       const Dof& ref = plan.references[ir];
-      for (int k = 1; k <= plan.impacts_per_reference; ++k) {
-        const double peak = plan.force_peak_n * (1.0 + plan.force_spread * uniform(rng));
+      for (int k = 1; k <= impacts; ++k) {
+        const double level = levels[static_cast<size_t>((k - 1) / plan.impacts_per_reference)];
+        const double peak = level * (1.0 + plan.force_spread * uniform(rng));
         const double jitter = plan.trigger_jitter ? unit(rng) * dt : 0.0;
         const double t0 = pre * dt - rise_to_trigger + jitter;
         std::vector<std::pair<double, double>> pulses{{t0, peak}};
         for (const DoubleHit& d : plan.double_hits)
           if (d.set == static_cast<int>(s) && d.reference == static_cast<int>(ir) && d.impact == k)
             pulses.push_back({t0 + d.delay_s, peak * d.ratio});
-        ImpactSignals sig = SimulateImpact(truth, ref, responses, pulses, plan.pulse_duration_s, plan.sample_rate_hz, n,
-                                           plan.response_quantity, plan.oversampling);
+        ImpactSignals sig = simulate(ref, responses, pulses);
         const std::string where = "simulated set " + std::to_string(s + 1) + ", reference " + DofName(ref) +
                                   ", impact " + std::to_string(k);
         TimeRecord force;
@@ -304,15 +290,28 @@ std::vector<SimulatedSet> SimulateHammerTestSets(const std::vector<ModalTruth>& 
   return sets;
 }
 
-std::vector<TimeRecord> SimulateHammerTest(const std::vector<ModalTruth>& truth_per_set, const HammerTestPlan& plan) {
-  std::vector<SimulatedSet> sets = SimulateHammerTestSets(truth_per_set, plan);
+namespace {
+
+std::vector<TimeRecord> Flatten(std::vector<SimulatedSet> sets, const HammerTestPlan& plan) {
+  const int impacts = plan.impacts_per_reference * static_cast<int>(std::max<size_t>(1, plan.force_levels_n.size()));
   std::vector<TimeRecord> all;
   for (size_t s = 0; s < sets.size(); ++s)
     for (TimeRecord& r : sets[s].records) {
-      if (plan.number_impacts_across_sets) r.impact += static_cast<int>(s) * plan.impacts_per_reference;
+      if (plan.number_impacts_across_sets) r.impact += static_cast<int>(s) * impacts;
       all.push_back(std::move(r));
     }
   return all;
+}
+
+}  // namespace
+
+std::vector<TimeRecord> SimulateHammerTest(const std::vector<ModalTruth>& truth_per_set, const HammerTestPlan& plan) {
+  return Flatten(SimulateHammerTestSets(truth_per_set, plan), plan);
+}
+
+std::vector<TimeRecord> SimulateHammerTestWith(const std::vector<ImpactFunction>& impact_per_set,
+                                               const HammerTestPlan& plan) {
+  return Flatten(SimulateHammerTestSetsWith(impact_per_set, plan), plan);
 }
 
 }  // namespace ema::acquisition

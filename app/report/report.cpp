@@ -52,7 +52,7 @@ std::vector<int> DisplayLines(const FrfSet& frfs, double lo, double hi) {
   return lines;
 }
 
-json FrfData(const SetupResults& setup, const ShapeTable& test) {
+json FrfData(const SetupResults& setup) {
   json out = json::object();
   if (!setup.frfs || setup.frfs->LineCount() == 0) return out;
   const FrfSet& frfs = *setup.frfs;
@@ -60,24 +60,17 @@ json FrfData(const SetupResults& setup, const ShapeTable& test) {
   Eigen::VectorXd f(static_cast<int>(lines.size()));
   for (int i = 0; i < f.size(); ++i) f[i] = frfs.frequency_hz[lines[i]];
   out["frequency_hz"] = Rounded(f);
-  std::vector<std::complex<double>> poles;
-  for (size_t m = 0; m < test.frequency_hz.size(); ++m)
-    if (std::isfinite(test.frequency_hz[m]))
-      poles.push_back(FrequencyAndDampingToPole(test.frequency_hz[m],
-                                                std::isfinite(test.damping_ratio[m]) ? test.damping_ratio[m] : 0.01));
-  double lo = setup.band_lo_hz, hi = setup.band_hi_hz;
-  if (hi <= lo) {
-    lo = frfs.frequency_hz.minCoeff();
-    hi = frfs.frequency_hz.maxCoeff();
-  }
+  // The fit's own modal model (MODES.json "modal_model": refined poles, residues, residual terms).
+  const json model = setup.test_modes.is_object() && setup.test_modes.contains("modal_model")
+                         ? setup.test_modes["modal_model"]
+                         : json();
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(f.size());
   json list = json::array();
   for (int r = 0; r < frfs.ReferenceCount(); ++r) {
     for (int o = 0; o < frfs.OutputCount(); ++o) {
       const Eigen::VectorXcd h = frfs.h[r].col(o);
       if (!h.allFinite() && !(h.array() == h.array()).any()) continue;  // not measured
-      const Eigen::VectorXcd fit = poles.empty() ? Eigen::VectorXcd::Constant(h.size(), {kNaN, kNaN})
-                                                 : SynthesiseFrf(frfs.frequency_hz, h, poles, lo, hi);
+      const Eigen::VectorXcd fit = SynthesiseFromModalModel(model, frfs.outputs[o], frfs.references[r], frfs.frequency_hz);
       Eigen::VectorXd mag(f.size()), phase(f.size()), fit_mag(f.size()), fit_phase(f.size());
       for (int i = 0; i < f.size(); ++i) {
         const std::complex<double> v = h[lines[i]], w = fit[lines[i]];
@@ -106,17 +99,21 @@ json FrfData(const SetupResults& setup, const ShapeTable& test) {
   return out;
 }
 
-json MacData(const ShapeTable& test, const json& model_json) {
+// The MAC matrix of the correlation step (CORR.json "mac", test modes as rows), not recomputed here.
+json MacData(const ShapeTable& test, const json& model_json, const json& correlation) {
   const ShapeTable model = ReadShapeTable(model_json);
-  int shared = 0;
-  const Eigen::MatrixXd mac = MacMatrix(test, model, &shared);
-  if (mac.size() == 0) return json::object();
+  if (!correlation.is_object() || !correlation.contains("mac") || !correlation["mac"].is_array()) return json::object();
   json values = json::array();
-  for (int i = 0; i < mac.rows(); ++i) {
+  for (const json& row_in : correlation["mac"]) {
     json row = json::array();
-    for (int j = 0; j < mac.cols(); ++j) row.push_back(Round(mac(i, j)));
+    if (row_in.is_array())
+      for (const json& v : row_in) row.push_back(v.is_number() ? json(Round(v.get<double>())) : json(nullptr));
     values.push_back(std::move(row));
   }
+  int shared = 0;
+  if (correlation.contains("summary") && correlation["summary"].is_object() &&
+      correlation["summary"].contains("shared_dofs") && correlation["summary"]["shared_dofs"].is_number_integer())
+    shared = correlation["summary"]["shared_dofs"].get<int>();
   auto labels = [](const ShapeTable& t, const char* prefix) {
     json out = json::array();
     for (size_t m = 0; m < t.frequency_hz.size(); ++m) {
@@ -171,6 +168,27 @@ json ModeData(const ShapeTable& test, const SetupResults& setup) {
   return out;
 }
 
+// The fitted test modes with their 1-sigma (MODES.json frequency_std_hz, damping_ratio_std) and
+// the poles the fit dropped, for the report's mode table. Values as ema fit wrote them.
+json TestModeTable(const json& test_modes) {
+  json out = json::object();
+  if (!test_modes.is_object() || !test_modes.contains("modes") || !test_modes["modes"].is_array()) return out;
+  auto number = [](const json& j, const char* key) -> json {
+    return j.is_object() && j.contains(key) && j[key].is_number() ? json(j[key].get<double>()) : json(nullptr);
+  };
+  json rows = json::array();
+  for (const json& m : test_modes["modes"])
+    rows.push_back({{"frequency_hz", number(m, "frequency_hz")},
+                    {"frequency_std_hz", number(m, "frequency_std_hz")},
+                    {"damping_ratio", number(m, "damping_ratio")},
+                    {"damping_ratio_std", number(m, "damping_ratio_std")},
+                    {"mpc", number(m, "mpc")}});
+  out["modes"] = rows;
+  if (test_modes.contains("refinement")) out["refinement"] = test_modes["refinement"];
+  if (test_modes.contains("dropped")) out["dropped"] = test_modes["dropped"];
+  return out;
+}
+
 json StabilisationData(const SetupResults& setup) {
   const StabilisationPoints points = ReadStabilisation(setup.stabilisation);
   if (points.order.empty()) return json::object();
@@ -212,6 +230,7 @@ json BuildReportData(const ReportInput& input) {
   data["files"] = input.steps;
   data["problems"] = input.problems;
   data["diagnosis"] = input.diagnosis.is_null() ? json::object() : input.diagnosis;
+  if (!input.amplitude.is_null()) data["amplitude"] = input.amplitude;
   json setups = json::array();
   for (const SetupResults& setup : input.setups) {
     const ShapeTable test = ReadShapeTable(setup.test_modes);
@@ -223,12 +242,13 @@ json BuildReportData(const ReportInput& input) {
     json selected = json::array();
     for (double f : test.frequency_hz) selected.push_back(Round(f));
     s["selected_hz"] = selected;
-    s["frf"] = FrfData(setup, test);
-    s["mac_before"] = MacData(test, setup.model_modes_before);
-    s["mac_after"] = MacData(test, setup.model_modes_after);
+    s["frf"] = FrfData(setup);
+    s["mac_before"] = MacData(test, setup.model_modes_before, setup.correlation_before);
+    s["mac_after"] = MacData(test, setup.model_modes_after, setup.correlation_after);
     s["correlation_before"] = setup.correlation_before.is_null() ? json::object() : setup.correlation_before;
     s["correlation_after"] = setup.correlation_after.is_null() ? json::object() : setup.correlation_after;
     s["shapes"] = ModeData(test, setup);
+    s["test_mode_table"] = TestModeTable(setup.test_modes);
     json rejected = json::array();
     if (setup.frf_summary.is_object() && setup.frf_summary.contains("frfs") && setup.frf_summary["frfs"].is_array()) {
       for (const json& frf : setup.frf_summary["frfs"]) {

@@ -42,6 +42,9 @@ struct ReportInput {
   std::vector<std::string> steps;      ///< the files each step wrote, for the "files" list
   std::vector<SetupResults> setups;
   nlohmann::json diagnosis;            ///< `ema diagnose --json`
+  /// `ema amplitude --json` (cli.md) when the test was run at several force levels: the report
+  /// then plots frequency and damping against level per mode. Null: no such section.
+  nlohmann::json amplitude;
   std::vector<std::string> problems;   ///< steps that failed or were skipped, shown in the page
 };
 
@@ -66,15 +69,12 @@ struct ShapeTable {
 /// Unknown or missing pieces give an empty table (the report then says the chart is unavailable).
 ShapeTable ReadShapeTable(const nlohmann::json& modes_json);
 
-/// MAC between every test and every model mode on their shared DOFs (test modes as rows).
-/// Returns an empty matrix when no DOF is shared.
-Eigen::MatrixXd MacMatrix(const ShapeTable& test, const ShapeTable& model, int* shared_dofs = nullptr);
-
-/// Least-squares synthesis of one FRF from the given poles (rad/s, Im > 0) on the lines inside
-/// [lo, hi] Hz: residues of every pole and its conjugate plus a constant and a 1/(jw)^2 term
-/// (upper and lower residuals), the LSFD model. Returns NaN outside the band.
-Eigen::VectorXcd SynthesiseFrf(const Eigen::VectorXd& frequency_hz, const Eigen::VectorXcd& measured,
-                               const std::vector<std::complex<double>>& poles, double lo_hz, double hi_hz);
+/// The FRF from `reference` to `response` of the fit's own modal model (MODES.json
+/// "modal_model" of `ema fit`: poles as fitted, receptance residues, real lower/upper residual
+/// terms, FRF type; curvefit.md), on the lines inside the model's band. NaN elsewhere, and
+/// everywhere when the model lacks that FRF (nothing is re-fitted here).
+Eigen::VectorXcd SynthesiseFromModalModel(const nlohmann::json& modal_model, const Dof& response, const Dof& reference,
+                                          const Eigen::VectorXd& frequency_hz);
 
 /// Normalised stabilisation diagram: one entry per pole (order, frequency, damping, stable flag).
 struct StabilisationPoints {

@@ -297,6 +297,28 @@
         ((c.unpaired_model || []).length) }));
     });
 
+    // Test modes with their 1-sigma from the fit (ema fit's ML refinement).
+    var tm = setup.test_mode_table || {};
+    var tms = section(wrap, 'Test modes — ' + setup.name,
+      'Fitted modes, f ± σ and ζ ± σ: 1σ of the estimate from the data\'s own noise (Fisher information of the ' +
+      'maximum-likelihood fit).' + (tm.refinement ? ' Refinement: ' + tm.refinement.termination + ', noise from ' +
+      tm.refinement.noise_source + '.' : ''));
+    if (tm.modes && tm.modes.length) {
+      var pm = function (v, s, scale, digits) {
+        return fmt(v === null ? v : scale * v, digits) + (s === null || s === undefined ? '' : ' ± ' +
+          Number(scale * s).toPrecision(2));
+      };
+      table(tms, ['mode', 'f ± σ (Hz)', 'ζ ± σ (%)', 'MPC'], tm.modes.map(function (m, i) {
+        return [i + 1, pm(m.frequency_hz, m.frequency_std_hz, 1, 3), pm(m.damping_ratio, m.damping_ratio_std, 100, 3),
+          fmt(m.mpc, 3)];
+      }));
+      (tm.dropped || []).forEach(function (d) {
+        tms.appendChild(el('p', { 'class': 'note', text: 'Pole at ' + fmt(d.frequency_hz, 2) + ' Hz dropped: ' + d.reason }));
+      });
+    } else {
+      unavailable(tms, 'Test modes');
+    }
+
     // Animated mode shapes on the test geometry.
     var ms = section(wrap, 'Mode shapes — ' + setup.name,
       'Test mode shapes animated on the test geometry (real part of the shape × cos ωt + imaginary part × sin ωt). ' +
@@ -437,6 +459,8 @@
     unavailable(dg, 'Diagnosis');
   }
 
+  drawAmplitude(data.amplitude);
+
   if (data.files && data.files.length) {
     var files = section(main, 'Files written by this run');
     files.appendChild(el('ul', { 'class': 'files' }, data.files.map(function (f) { return el('li', null, [el('code', { text: f })]); })));
@@ -446,6 +470,37 @@
   function resizeCharts() { charts.forEach(function (div) { Plotly.Plots.resize(div); }); }
   window.addEventListener('beforeprint', resizeCharts);
   window.addEventListener('afterprint', resizeCharts);
+  // ---- amplitude dependence (ema amplitude --json; docs/amplitude.md) ----
+  function drawAmplitude(amp) {
+    if (!amp || !amp.modes || !amp.modes.length) return;
+    var unit = amp.level_kind === 'response' ? 'response level' :
+      (amp.level_kind === 'rms_force' ? 'RMS force (N)' : 'peak force (N)');
+    var sec = section(main, 'Frequency and damping against level',
+      'Each mode followed over the excitation levels; error bars are the fit\'s 1σ where known. ' +
+      'Trends are tested against each point\'s σ and a repeatability floor (docs/amplitude.md).');
+    table(sec, ['mode', 'frequency', 'change %', 'damping', 'ζ factor', 'reading'], amp.modes.map(function (m) {
+      return [m.mode, m.frequency_trend, fmt(m.frequency_change_pct, 3), m.damping_trend,
+        fmt(m.damping_ratio_factor, 2), m.reading];
+    }), 'small');
+    amp.modes.forEach(function (m) {
+      var x = m.levels.map(function (p) { return p.level; });
+      var bar = function (key, scale) {
+        var v = m.levels.map(function (p) { return p[key] === null || p[key] === undefined ? 0 : p[key] * scale; });
+        return { type: 'data', array: v, visible: v.some(function (e) { return e > 0; }) };
+      };
+      chart(sec, [
+        { x: x, y: m.levels.map(function (p) { return p.frequency_hz; }), name: 'f (Hz)', mode: 'lines+markers',
+          error_y: bar('frequency_std_hz', 1) },
+        { x: x, y: m.levels.map(function (p) { return 100 * p.damping_ratio; }), name: 'ζ (%)', yaxis: 'y2',
+          mode: 'lines+markers', error_y: bar('damping_ratio_std', 100) }
+      ], {
+        height: 360, margin: { l: 60, r: 60, t: 40, b: 50 },
+        title: { text: 'mode ' + m.mode + ': frequency ' + m.frequency_trend + ', damping ' + m.damping_trend },
+        xaxis: { title: { text: unit }, type: 'log' }, yaxis: { title: { text: 'frequency (Hz)' } },
+        yaxis2: { title: { text: 'damping ratio (%)' }, overlaying: 'y', side: 'right', showgrid: false }
+      });
+    });
+  }
 
   body.setAttribute('data-charts-expected', String(expected));
   Promise.all(pending).then(function () {

@@ -1,7 +1,8 @@
-// Data preparation of the HTML report: shape tables, MAC matrix, FRF synthesis, stabilisation points.
+// Data preparation of the HTML report: shape tables, the fit's modal model as FRFs, stabilisation points.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "report.hpp"
@@ -72,67 +73,42 @@ ShapeTable ReadShapeTable(const json& modes_json) {
   return table;
 }
 
-Eigen::MatrixXd MacMatrix(const ShapeTable& test, const ShapeTable& model, int* shared_dofs) {
-  std::vector<std::pair<int, int>> shared;
-  for (int i = 0; i < static_cast<int>(test.dofs.size()); ++i) {
-    auto it = std::lower_bound(model.dofs.begin(), model.dofs.end(), test.dofs[i]);
-    if (it != model.dofs.end() && *it == test.dofs[i]) shared.emplace_back(i, static_cast<int>(it - model.dofs.begin()));
-  }
-  if (shared_dofs) *shared_dofs = static_cast<int>(shared.size());
-  if (shared.empty()) return {};
-  const int n = static_cast<int>(shared.size());
-  Eigen::MatrixXcd a(n, test.shapes.cols()), b(n, model.shapes.cols());
-  for (int k = 0; k < n; ++k) {
-    a.row(k) = test.shapes.row(shared[k].first);
-    b.row(k) = model.shapes.row(shared[k].second);
-  }
-  Eigen::MatrixXd mac(a.cols(), b.cols());
-  for (int i = 0; i < a.cols(); ++i) {
-    for (int j = 0; j < b.cols(); ++j) {
-      const double cross = std::norm(a.col(i).dot(b.col(j)));  // |a^H b|^2: complex-safe
-      const double denominator = a.col(i).squaredNorm() * b.col(j).squaredNorm();
-      mac(i, j) = denominator > 0.0 ? cross / denominator : 0.0;
-    }
-  }
-  return mac;
-}
-
-Eigen::VectorXcd SynthesiseFrf(const Eigen::VectorXd& frequency_hz, const Eigen::VectorXcd& measured,
-                               const std::vector<std::complex<double>>& poles, double lo_hz, double hi_hz) {
-  const int n = static_cast<int>(frequency_hz.size());
+Eigen::VectorXcd SynthesiseFromModalModel(const json& model, const Dof& response, const Dof& reference,
+                                          const Eigen::VectorXd& frequency_hz) {
+  const Eigen::Index n = frequency_hz.size();
   Eigen::VectorXcd out = Eigen::VectorXcd::Constant(n, {kNaN, kNaN});
-  if (hi_hz <= lo_hz) {
-    lo_hz = frequency_hz.size() ? frequency_hz.minCoeff() : 0.0;
-    hi_hz = frequency_hz.size() ? frequency_hz.maxCoeff() : 0.0;
-  }
-  std::vector<int> lines;
-  for (int i = 0; i < n; ++i)
-    if (frequency_hz[i] >= lo_hz && frequency_hz[i] <= hi_hz && frequency_hz[i] > 0.0 && std::isfinite(std::abs(measured[i])))
-      lines.push_back(i);
-  const int columns = 2 * static_cast<int>(poles.size()) + 2;
-  if (static_cast<int>(lines.size()) < columns + 1) return out;
-  // Basis scaled by the band's top angular frequency so the columns are of similar size.
-  const double scale = kTwoPi * hi_hz;
-  auto basis = [&](double f_hz, int column) -> std::complex<double> {
-    const std::complex<double> s(0.0, kTwoPi * f_hz / scale);
-    const int k = column / 2;
-    if (k < static_cast<int>(poles.size())) {
-      const std::complex<double> pole = poles[k] / scale;
-      return column % 2 == 0 ? 1.0 / (s - pole) : 1.0 / (s - std::conj(pole));
+  if (!model.is_object() || !model.contains("poles") || !model.contains("frfs") || !model["frfs"].is_array()) return out;
+  const json* entry = nullptr;
+  for (const json& frf : model["frfs"]) {
+    if (!frf.is_object()) continue;
+    const Dof res{frf.value("response_node", 0), DirectionOf(frf.value("response_dir", json()))};
+    const Dof ref{frf.value("reference_node", 0), DirectionOf(frf.value("reference_dir", json()))};
+    if (res == response && ref == reference) {
+      entry = &frf;
+      break;
     }
-    return column % 2 == 0 ? std::complex<double>(1.0, 0.0) : 1.0 / (s * s);
-  };
-  Eigen::MatrixXcd a(static_cast<int>(lines.size()), columns);
-  Eigen::VectorXcd b(static_cast<int>(lines.size()));
-  for (int r = 0; r < static_cast<int>(lines.size()); ++r) {
-    for (int c = 0; c < columns; ++c) a(r, c) = basis(frequency_hz[lines[r]], c);
-    b[r] = measured[lines[r]];
   }
-  const Eigen::VectorXcd x = a.colPivHouseholderQr().solve(b);
-  for (int i : lines) {
-    std::complex<double> value = 0.0;
-    for (int c = 0; c < columns; ++c) value += x[c] * basis(frequency_hz[i], c);
-    out[i] = value;
+  if (!entry || !entry->contains("residues") || !(*entry)["residues"].is_array()) return out;
+  std::vector<std::complex<double>> poles, residues;
+  for (const json& p : model["poles"]) poles.push_back(ComplexOf(p));
+  for (const json& r : (*entry)["residues"]) residues.push_back(ComplexOf(r));
+  if (poles.size() != residues.size()) return out;
+  const std::string type = model.value("frf_type", std::string("accelerance"));
+  const int k_pow = type == "receptance" ? 0 : type == "mobility" ? 1 : 2;
+  const double lower = Number(*entry, "lower_residual", 0.0), upper = Number(*entry, "upper_residual", 0.0);
+  double lo = 0.0, hi = std::numeric_limits<double>::infinity();
+  if (model.contains("band_hz") && model["band_hz"].is_array() && model["band_hz"].size() == 2) {
+    lo = model["band_hz"][0].get<double>();
+    hi = model["band_hz"][1].get<double>();
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double f = frequency_hz[i];
+    if (!(f > 0.0) || f < lo || f > hi) continue;
+    const std::complex<double> jw(0.0, kTwoPi * f);
+    std::complex<double> v = lower / (jw * jw) + upper;
+    for (size_t r = 0; r < poles.size(); ++r)
+      v += residues[r] / (jw - poles[r]) + std::conj(residues[r]) / (jw - std::conj(poles[r]));
+    out[i] = v * std::pow(jw, k_pow);
   }
   return out;
 }

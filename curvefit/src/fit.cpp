@@ -1,8 +1,185 @@
 #include "ema/curvefit/fit.hpp"
 
+#include "ema/core/error.hpp"
+
+#include <Eigen/SVD>
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <sstream>
 
 namespace ema::curvefit {
+
+std::vector<SelectedPole> SelectPolesNarrowBand(const StabilisationDiagram& diagram, const FitOptions& options,
+                                                std::string* note) {
+  // A band of few lines supports few orders (the normal equations turn singular early), so a
+  // physical pole is seen at only a handful of orders, and at those low orders its damping
+  // still moves by more than the 5 % of the default criterion between orders. Relax both to
+  // what such a band can show: damping stable to 20 %, a cluster over 3 orders.
+  const int orders = static_cast<int>(diagram.orders.size());
+  const int lines = static_cast<int>(diagram.frequency_hz.size());
+  if (orders < 2 || lines > options.narrow_band_max_lines) return {};
+  StabilisationDiagram relaxed = diagram;
+  StabilityOptions stability = options.stability;
+  stability.damping_tol = std::max(stability.damping_tol, 0.2);
+  ClassifyStability(&relaxed, stability);
+  AutoSelectOptions select = options.auto_select;
+  select.min_orders = std::min(select.min_orders, 3);
+  std::vector<SelectedPole> selected = SelectPolesAuto(relaxed, select);
+  if (note && !selected.empty())
+    *note = "narrow band (" + std::to_string(diagram.frequency_hz.size()) + " lines, orders " +
+            std::to_string(diagram.order_min) + ".." + std::to_string(diagram.order_max) +
+            "): poles selected with relaxed stability (damping within 20 %, clusters over 3 orders)";
+  return selected;
+}
+
+namespace {
+
+// ML refinement of the selected poles (or, for --refine none, only their uncertainty). Updates the
+// poles (and, from the refined residues, the participation vectors) when the refinement is usable.
+bool RefineSelected(const FitData& data, const FitOptions& options, const std::string& source, FitResult* result,
+                    MlRefineResult* ml) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  MlRefineOptions mo = options.ml;
+  mo.estimate_only = options.refine == RefineMethod::kNone;
+  mo.lower_residual = options.lsfd.lower_residual;
+  mo.upper_residual = options.lsfd.upper_residual;
+  try {
+    *ml = RefineModalModel(data, result->selected, mo);
+  } catch (const InputError& e) {
+    result->warnings.push_back(source + ": no ML refinement or uncertainty: " + e.what());
+    return false;
+  }
+  result->refine = ml->summary;
+  result->timing.refine_wall = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (!ml->summary.IsSolutionUsable()) {
+    result->warnings.push_back(source + ": " + ml->summary.BriefReport() + "; PolyMAX poles kept");
+    return std::isfinite(ml->summary.final_cost);  // sigma at the PolyMAX poles when computed
+  }
+  if (mo.estimate_only) return true;
+  const int m = data.ReferenceCount(), l = data.OutputCount();
+  for (size_t r = 0; r < result->selected.size(); ++r) {
+    Pole& p = result->selected[r].pole;
+    const RefinedPole& rp = ml->poles[r];
+    p.lambda_fitted = rp.lambda_fitted;
+    p.lambda = rp.lambda;
+    p.frequency_hz = rp.frequency_hz;
+    p.damping_ratio = rp.damping_ratio;
+    if (m >= 2) {
+      // R_r = phi l^T over (output, reference): rank-one part by SVD, l = conj(first right vector).
+      Eigen::MatrixXcd rr(l, m);
+      for (int o = 0; o < l; ++o)
+        for (int i = 0; i < m; ++i) rr(o, i) = ml->residues(o * m + i, static_cast<int>(r));
+      Eigen::JacobiSVD<Eigen::MatrixXcd> svd(rr, Eigen::ComputeThinV);
+      if (svd.singularValues()[0] > 0.0) p.participation = svd.matrixV().col(0).conjugate();
+    }
+  }
+  return true;
+}
+
+// Frequency/damping sigma per mode; sigma of |shape| from the residues' sigma at the strongest
+// reference, scaled like the shape (first order; the scaling factor's own uncertainty neglected).
+void AttachUncertainty(const MlRefineResult& ml, LsfdResult& lsfd) {
+  const int n_frf = static_cast<int>(ml.residues.rows());
+  for (size_t r = 0; r < lsfd.modes.modes.size() && r < ml.poles.size(); ++r) {
+    Mode& mode = lsfd.modes.modes[r];
+    mode.frequency_std_hz = ml.poles[r].frequency_std_hz;
+    mode.damping_ratio_std = ml.poles[r].damping_ratio_std;
+    const int m = static_cast<int>(mode.participation.size());
+    const int l = static_cast<int>(mode.shape.size());
+    if (m == 0 || l * m != n_frf) continue;
+    int imax = 0;
+    mode.participation.cwiseAbs().maxCoeff(&imax);
+    double res_norm = 0.0;
+    for (int o = 0; o < l; ++o) res_norm += std::norm(lsfd.residues(o * m + imax, static_cast<int>(r)));
+    res_norm = std::sqrt(res_norm);
+    if (!(res_norm > 0.0)) continue;
+    const double kappa = mode.shape.norm() / res_norm;
+    mode.shape_std.resize(l);
+    for (int o = 0; o < l; ++o) mode.shape_std[o] = kappa * ml.residue_std(o * m + imax, static_cast<int>(r));
+  }
+}
+
+void FillModel(const FitData& data, const std::vector<SelectedPole>& selected, const LsfdResult& lsfd, ModalModel* model) {
+  model->outputs = data.outputs;
+  model->references = data.references;
+  model->transposed = data.transposed;
+  model->frf_type = data.frf_type;
+  model->band_lo_hz = data.frequency_hz.size() ? data.frequency_hz[0] : 0.0;
+  model->band_hi_hz = data.frequency_hz.size() ? data.frequency_hz[data.frequency_hz.size() - 1] : 0.0;
+  model->poles_fitted.clear();
+  for (const auto& s : selected) model->poles_fitted.push_back(s.pole.lambda_fitted);
+  model->residues = lsfd.residues;
+  model->lower_residual = lsfd.lower_residual;
+  model->upper_residual = lsfd.upper_residual;
+}
+
+// Two poles whose half-power bands overlap, with the same participation vector (the references
+// excite them alike: m >= 2) but living on different outputs (little overlap of |shape|^2) are one
+// mode measured with different frequencies by different roving sets (sensor mass loading) or
+// records: the weaker (smaller residue energy) is returned for dropping, -1 when there is none.
+int FindSplitPole(const FitData& data, const std::vector<SelectedPole>& selected, const LsfdResult& lsfd,
+                  const SplitPoleOptions& options, DroppedPole* dropped) {
+  const int n = static_cast<int>(selected.size());
+  const int m = data.ReferenceCount();
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      const Pole& pa = selected[a].pole;
+      const Pole& pb = selected[b].pole;
+      if (std::abs(pa.frequency_hz - pb.frequency_hz) >=
+          pa.damping_ratio * pa.frequency_hz + pb.damping_ratio * pb.frequency_hz)
+        continue;  // half-power bands apart: resolvable modes
+      double part_mac = kNaN;
+      if (m >= 2) {
+        part_mac = Mac(pa.participation, pb.participation);
+        if (!(part_mac >= options.participation_mac_min)) continue;
+      }
+      const Eigen::VectorXcd& sa = lsfd.modes.modes[a].shape;
+      const Eigen::VectorXcd& sb = lsfd.modes.modes[b].shape;
+      if (sa.size() != sb.size() || sa.size() == 0 || !(sa.squaredNorm() > 0.0) || !(sb.squaredNorm() > 0.0)) continue;
+      const Eigen::VectorXd ea = sa.cwiseAbs2() / sa.squaredNorm(), eb = sb.cwiseAbs2() / sb.squaredNorm();
+      const double overlap = ea.cwiseMin(eb).sum();
+      if (!(overlap <= options.support_overlap_max)) continue;
+      const double energy_a = lsfd.residues.col(a).squaredNorm(), energy_b = lsfd.residues.col(b).squaredNorm();
+      const int weak = energy_a < energy_b ? a : b, strong = weak == a ? b : a;
+      std::ostringstream why;
+      why.precision(3);
+      why << "same mode as the one at " << selected[strong].pole.frequency_hz << " Hz seen on other outputs ("
+          << (m >= 2 ? "participation MAC " : "") ;
+      if (m >= 2) why << part_mac << ", ";
+      why << "shape overlap " << overlap
+          << "): roving sets or records disagree on its frequency; the mode is fitted as one pole";
+      dropped->frequency_hz = selected[weak].pole.frequency_hz;
+      dropped->damping_ratio = selected[weak].pole.damping_ratio;
+      dropped->merged_into_hz = selected[strong].pole.frequency_hz;
+      dropped->reason = why.str();
+      return weak;
+    }
+  return -1;
+}
+
+}  // namespace
+
+Eigen::VectorXcd SynthesiseFrf(const ModalModel& model, int output, int reference, const Eigen::VectorXd& frequency_hz) {
+  const int m = static_cast<int>(model.references.size());
+  const int c = output * m + reference;
+  const int k_pow = model.frf_type == FrfType::kReceptance ? 0 : model.frf_type == FrfType::kMobility ? 1 : 2;
+  Eigen::VectorXcd h(frequency_hz.size());
+  for (Eigen::Index f = 0; f < frequency_hz.size(); ++f) {
+    const std::complex<double> jw(0.0, kTwoPi * frequency_hz[f]);
+    const std::complex<double> fac = std::pow(jw, k_pow);
+    std::complex<double> v = 0.0;
+    for (size_t r = 0; r < model.poles_fitted.size(); ++r) {
+      const std::complex<double> res = model.residues(c, static_cast<int>(r)), lam = model.poles_fitted[r];
+      v += res / (jw - lam) + std::conj(res) / (jw - std::conj(lam));
+    }
+    if (model.lower_residual.size() > c && frequency_hz[f] > 0.0) v += model.lower_residual[c] / (jw * jw);
+    if (model.upper_residual.size() > c) v += model.upper_residual[c];
+    h[f] = fac * v;
+  }
+  return h;
+}
 
 FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& source,
               const ProgressCallback& progress) {
@@ -23,19 +200,51 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
     result.selected = options.select_frequencies_hz.empty()
                           ? SelectPolesAuto(result.diagram, options.auto_select)
                           : SelectPolesNear(result.diagram, options.select_frequencies_hz);
+    if (options.select_frequencies_hz.empty()) {
+      std::string note;
+      std::vector<SelectedPole> relaxed = SelectPolesNarrowBand(result.diagram, options, &note);
+      if (relaxed.size() > result.selected.size()) {
+        result.selected = std::move(relaxed);
+        result.warnings.push_back(source + ": " + note);
+      }
+    }
     const double t2 = ThreadCpuSeconds();
     if (!result.selected.empty()) {
-      LsfdResult lsfd = EstimateModeShapes(data, result.selected, options.lsfd);
-      result.modes = std::move(lsfd.modes);
-      result.synthesis_error = lsfd.synthesis_error;
-      for (const auto& w : lsfd.warnings) result.warnings.push_back(source + ": " + w);
+      for (;;) {
+        const size_t warnings_before = result.warnings.size();
+        MlRefineResult ml;
+        const bool have_ml = RefineSelected(data, options, source, &result, &ml);
+        const double t_lsfd = ThreadCpuSeconds();
+        LsfdResult lsfd = EstimateModeShapes(data, result.selected, options.lsfd);
+        result.timing.lsfd += ThreadCpuSeconds() - t_lsfd;
+        // Automatic selection only: a pole that is the same mode as a neighbour seen on other
+        // outputs (roving-set inconsistency) is dropped and the model fitted again without it.
+        if (options.select_frequencies_hz.empty() && options.split_poles.enabled) {
+          DroppedPole dropped;
+          const int drop = FindSplitPole(data, result.selected, lsfd, options.split_poles, &dropped);
+          if (drop >= 0) {
+            result.warnings.resize(warnings_before);  // this round's refinement messages are moot
+            result.dropped.push_back(dropped);
+            result.warnings.push_back(source + ": pole at " + std::to_string(dropped.frequency_hz) + " Hz dropped: " +
+                                      dropped.reason);
+            result.selected.erase(result.selected.begin() + drop);
+            continue;
+          }
+        }
+        if (have_ml) AttachUncertainty(ml, lsfd);
+        FillModel(data, result.selected, lsfd, &result.model);
+        result.modes = std::move(lsfd.modes);
+        result.synthesis_error = lsfd.synthesis_error;
+        for (const auto& w : lsfd.warnings) result.warnings.push_back(source + ": " + w);
+        break;
+      }
     } else {
       result.modes.dofs = data.outputs;
       result.warnings.push_back(source + ": no stable poles found; no modes selected");
     }
     const double t3 = ThreadCpuSeconds();
     result.timing.stabilisation_and_selection = t2 - t1;
-    result.timing.lsfd = t3 - t2;
+    result.timing.refine = t3 - t2 - result.timing.lsfd;
   }
   result.modes.source = source;
   result.timing.total = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -112,6 +112,29 @@ FitData PrepareFitData(const FrfSet& frfs, const FitDataOptions& options, const 
     d.warnings.push_back(source + ": " + msg.str() + "; those lines are skipped");
   }
 
+  // Noise variance of H1 from coherence (Bendat & Piersol, algorithms.md §1.8):
+  // var|dH|^2 ~ |H|^2 (1 - coh) / (n_avg coh). Needs n_avg >= 2 (one impact gives coh = 1).
+  const bool have_coherence = static_cast<int>(frfs.coherence.size()) == n_ref;
+  bool coherence_shapes_ok = have_coherence;
+  for (int r = 0; r < n_ref && coherence_shapes_ok; ++r)
+    coherence_shapes_ok = frfs.coherence[r].rows() == n_lines && frfs.coherence[r].cols() == n_out;
+  if (coherence_shapes_ok) {
+    const bool have_averages = frfs.averages.rows() == n_ref && frfs.averages.cols() == n_out;
+    d.noise_variance = Eigen::MatrixXd::Constant(n, l * m, kNaN);
+    for (int o = 0; o < l; ++o)
+      for (int i = 0; i < m; ++i) {
+        const int ref = d.transposed ? o : i, out = d.transposed ? i : o;
+        const int n_avg = have_averages ? frfs.averages(ref, out) : 0;
+        if (n_avg < 2) continue;
+        for (int k = 0; k < n; ++k) {
+          const double coh = frfs.coherence[ref](first + k, out);
+          const std::complex<double> h = d.h(k, o * m + i);
+          if (!(coh > 0.0 && coh <= 1.0) || d.line_weight[k] == 0.0) continue;
+          d.noise_variance(k, o * m + i) = std::norm(h) * (1.0 - coh) / (n_avg * coh);
+        }
+      }
+  }
+
   // Per-output 1/RMS weight (algorithms.md §2.2): a few large FRFs must not dominate.
   d.output_weight.resize(l);
   const double used = std::max(1.0, d.line_weight.sum());

@@ -105,6 +105,14 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
   LsfdResult result;
   result.synthesis_error = ref > 0.0 ? err / ref : 0.0;
   result.residues.resize(l * m, nm);
+  result.lower_residual = Eigen::VectorXd::Zero(l * m);
+  result.upper_residual = Eigen::VectorXd::Zero(l * m);
+  for (int o = 0; o < l; ++o)
+    for (int i = 0; i < m; ++i) {
+      int col = 2 * nm;
+      if (options.lower_residual) result.lower_residual[o * m + i] = X(col + i, o), col += m;
+      if (options.upper_residual) result.upper_residual[o * m + i] = X(col + i, o);
+    }
   ModeSet& set = result.modes;
   set.dofs = data.outputs;
   // Driving points: output DOF equal to a reference DOF.

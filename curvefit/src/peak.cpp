@@ -1,5 +1,6 @@
 #include "ema/curvefit/peak.hpp"
 
+#include <Eigen/Dense>
 #include <cmath>
 
 #include "ema/curvefit/complexity.hpp"
@@ -17,11 +18,19 @@ ModeSet PeakPick(const FitData& data, const PeakOptions& options) {
   auto valid = [&](int k) { return data.line_weight[k] > 0.0; };
   for (int k = 1; k + 1 < n; ++k) {
     if (!valid(k) || !valid(k - 1) || !valid(k + 1) || !(s[k] > s[k - 1] && s[k] >= s[k + 1])) continue;
-    // Valleys: walk down each side until the curve rises above the peak or the band ends.
+    // Valleys: walk down each side until the curve rises above the peak or the band ends. A
+    // side that reaches the band edge is open: a narrow band around one mode cuts its valleys
+    // off, so an open side only counts when both are open (then the lower one).
     double left_min = s[k], right_min = s[k];
-    for (int j = k - 1; j >= 0 && s[j] <= s[k]; --j) left_min = std::min(left_min, s[j]);
-    for (int j = k + 1; j < n && s[j] <= s[k]; ++j) right_min = std::min(right_min, s[j]);
-    if (s[k] < options.prominence * std::max(left_min, right_min)) continue;
+    int jl = k - 1, jr = k + 1;
+    for (; jl >= 0 && s[jl] <= s[k]; --jl) left_min = std::min(left_min, s[jl]);
+    for (; jr < n && s[jr] <= s[k]; ++jr) right_min = std::min(right_min, s[jr]);
+    const bool left_open = jl < 0, right_open = jr >= n;
+    const double valley = left_open && right_open ? std::min(left_min, right_min)
+                          : left_open             ? right_min
+                          : right_open            ? left_min
+                                                  : std::max(left_min, right_min);
+    if (s[k] < options.prominence * valley) continue;
     // Half-power crossings by linear interpolation between lines.
     const double half = s[k] / std::sqrt(2.0);
     double fb = kNaN, fa = kNaN;
@@ -35,11 +44,36 @@ ModeSet PeakPick(const FitData& data, const PeakOptions& options) {
         fa = data.frequency_hz[j] + (s[j] - half) / (s[j] - s[j + 1]) * data.line_spacing_hz;
         break;
       }
-    if (!std::isfinite(fa) || !std::isfinite(fb)) continue;
-    // Peak frequency refined by a parabola through the three top lines.
-    const double den = s[k - 1] - 2.0 * s[k] + s[k + 1];
-    const double shift = den != 0.0 ? 0.5 * (s[k - 1] - s[k + 1]) / den : 0.0;
-    const double fr = data.frequency_hz[k] + shift * data.line_spacing_hz;
+    if (!std::isfinite(fa) && !std::isfinite(fb)) continue;
+    // Peak frequency: near a resonance 1/|H|^2 is a parabola in f with its vertex at the
+    // resonance, so fit one by least squares to every line above the half-power level (at least
+    // the three top lines); a broad, noisy peak then uses all its lines, not just three.
+    double fr = data.frequency_hz[k];
+    {
+      int lo = k - 1, hi = k + 1;
+      while (lo > 0 && valid(lo - 1) && s[lo - 1] >= half) --lo;
+      while (hi + 1 < n && valid(hi + 1) && s[hi + 1] >= half) ++hi;
+      Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+      for (int j = lo; j <= hi; ++j) {
+        const double x = (data.frequency_hz[j] - data.frequency_hz[k]) / data.line_spacing_hz;
+        const Eigen::Vector3d row(1.0, x, x * x);
+        const double g = 1.0 / (s[j] * s[j]), w = s[j] * s[j] * s[j] * s[j];  // relative errors of g alike
+        ata += w * row * row.transpose();
+        atb += w * row * g;
+      }
+      const Eigen::Vector3d c = ata.ldlt().solve(atb);
+      const double shift = c[2] > 0.0 ? -c[1] / (2.0 * c[2]) : 0.0;
+      if (std::isfinite(shift) && std::abs(shift) <= 1.0) {
+        fr += shift * data.line_spacing_hz;
+      } else {
+        const double den = s[k - 1] - 2.0 * s[k] + s[k + 1];
+        fr += (den != 0.0 ? 0.5 * (s[k - 1] - s[k + 1]) / den : 0.0) * data.line_spacing_hz;
+      }
+    }
+    // A half-power point beyond the band edge: mirror the other one about the peak.
+    if (!std::isfinite(fa)) fa = 2.0 * fr - fb;
+    if (!std::isfinite(fb)) fb = 2.0 * fr - fa;
     const double eta = (fa * fa - fb * fb) / (2.0 * fr * fr);  // Eq. 4.44
     Mode mode;
     const std::complex<double> measured = FrequencyAndDampingToPole(fr, eta / 2.0);  // Eq. 4.45

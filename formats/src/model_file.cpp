@@ -108,9 +108,10 @@ class Reader : public TomlFields {
 
   Law ParseLaw(const toml::node& node, const std::string& context) const {
     const toml::table& t = Table(node, context);
-    static const std::set<std::string> kKinds = {"linear", "table", "air_film", "hertz", "series"};
+    static const std::set<std::string> kKinds = {"linear", "table", "air_film", "hertz", "series", "micro_slip"};
     if (t.size() != 1)
-      throw InputError(At(node), context + ": a law is a table with exactly one of linear, table, air_film, hertz, series");
+      throw InputError(At(node), context +
+                                     ": a law is a table with exactly one of linear, table, air_film, hertz, series, micro_slip");
     const auto first = t.begin();
     const std::string kind(first->first.str());
     const toml::node& body_node = first->second;
@@ -184,6 +185,18 @@ class Reader : public TomlFields {
       law.operating_deflection = OptNumber(b, "deflection");
       law.operating_force = OptNumber(b, "force");
       if (auto p = OptNumber(b, "preload")) law.operating_force = p;
+      return law;
+    }
+    if (kind == "micro_slip") {
+      CheckKeys(b, {"k", "slip_force", "elements"}, ctx);
+      model::MicroSlipLaw law;
+      law.k = Number(Require(b, "k", ctx), "k");
+      law.slip_force = Number(Require(b, "slip_force", ctx), "slip_force");
+      if (const toml::node* e = b.get("elements")) {
+        const auto v = e->value<int64_t>();
+        if (!e->is_integer() || !v || *v < 1) throw InputError(At(*e), ctx + ": 'elements' must be a positive integer");
+        law.elements = static_cast<int>(*v);
+      }
       return law;
     }
     CheckKeys(b, {"elements", "setting", "force"}, ctx);
@@ -468,6 +481,8 @@ std::string LawToToml(const model::Law& law) {
     body = "modulus = " + Num(h->modulus) + ", radius = " + Num(h->radius) + ", offset = " + Num(h->offset);
     if (h->operating_deflection) body += ", deflection = " + Num(*h->operating_deflection);
     if (h->operating_force) body += ", force = " + Num(*h->operating_force);
+  } else if (const auto* m = std::get_if<model::MicroSlipLaw>(&law.value)) {
+    body = "k = " + Num(m->k) + ", slip_force = " + Num(m->slip_force) + ", elements = " + std::to_string(m->elements);
   } else {
     const auto& s = std::get<model::SeriesLaw>(law.value);
     body = "elements = [";

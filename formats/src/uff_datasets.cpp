@@ -3,7 +3,9 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <string>
+#include <thread>
 
 #include "ema/core/error.hpp"
 #include "ema/formats/uff.hpp"
@@ -439,8 +441,25 @@ ValueLayout LayoutOf(const Function58& f) {
 
 // ------------------------------------------------------------------------------------------
 
+// Parallel parsing of big files (both cores): a worker parses the second half of the file, from a
+// dataset boundary found near the middle, while the caller streams the first half. The split is
+// only trusted when the caller's own sequential parse arrives at a start delimiter exactly at the
+// split offset; otherwise (or if the worker failed) the worker's result is discarded and the caller
+// simply keeps streaming, so the datasets, notes and errors are exactly those of a sequential read.
+struct SecondHalf {
+  std::uint64_t split = 0;             // byte offset of the start delimiter the worker began at
+  std::vector<Dataset> datasets;
+  std::vector<std::uint64_t> end_positions;  // file position after each dataset
+  std::vector<std::string> notes;
+  bool ok = false;
+  std::thread thread;
+};
+
 struct Reader::Impl {
   Impl(const std::filesystem::path& path, ReadOptions o) : in(path), options(o), file(path.string()) {}
+  ~Impl() {
+    if (second && second->thread.joinable()) second->thread.join();
+  }
 
   InputFile in;
   ReadOptions options;
@@ -450,11 +469,16 @@ struct Reader::Impl {
   bool saw_content = false;
   std::string_view pending;  // a start delimiter already consumed
   bool has_pending = false;
+  std::unique_ptr<SecondHalf> second;  // worker of the parallel read (null when not used)
+  bool serving_second = false;         // datasets now come from `second`
+  size_t served = 0;
 
   void FileNote(std::string s) {
     if (file_notes.size() < kMaxNotes) file_notes.push_back(std::move(s));
   }
 
+  void StartSecondHalf(const std::filesystem::path& path);
+  bool SplitReached(std::uint64_t start_offset);
   bool Next(Dataset* ds);
   void ReadAscii58(const Where& where, Function58* f, Dataset* ds);
   void ReadBinary58(std::string_view id_line, std::int64_t id_line_no, const Where& where, Function58* f, Dataset* ds);
@@ -462,7 +486,114 @@ struct Reader::Impl {
                         size_t want, std::int64_t declared);
 };
 
+namespace {
+
+// A likely dataset boundary at or after `from`: an end delimiter, a start delimiter, then a line
+// starting with a dataset number ("58", "58b", "151", ...). Returns the start delimiter's offset,
+// or 0 when none is found in the next 16 MiB.
+std::uint64_t FindBoundary(const std::filesystem::path& path, std::uint64_t from) {
+  std::FILE* fp = std::fopen(path.c_str(), "rb");
+  if (!fp) return 0;
+  std::vector<char> buf(std::size_t{1} << 24);
+  std::uint64_t found = 0;
+  if (fseeko(fp, static_cast<off_t>(from), SEEK_SET) == 0) {
+    const size_t got = std::fread(buf.data(), 1, buf.size(), fp);
+    std::string_view text(buf.data(), got);
+    size_t pos = text.find('\n');  // skip the partial line
+    std::vector<std::pair<size_t, std::string_view>> window;  // last three lines (offset, text)
+    while (pos != std::string_view::npos && pos + 1 < text.size()) {
+      const size_t start = pos + 1;
+      const size_t nl = text.find('\n', start);
+      if (nl == std::string_view::npos) break;
+      std::string_view line = text.substr(start, nl - start);
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      window.emplace_back(start, line);
+      if (window.size() > 3) window.erase(window.begin());
+      if (window.size() == 3 && IsDelimiterLine(window[0].second) && IsDelimiterLine(window[1].second)) {
+        std::string_view num = Trim(window[2].second);
+        size_t digits = 0;
+        while (digits < num.size() && num[digits] >= '0' && num[digits] <= '9') ++digits;
+        if (digits > 0 && digits <= 6) {
+          found = from + window[1].first;
+          break;
+        }
+      }
+      pos = nl;
+    }
+  }
+  std::fclose(fp);
+  return found;
+}
+
+}  // namespace
+
+void Reader::Impl::StartSecondHalf(const std::filesystem::path& path) {
+  const std::uint64_t size = in.Size();
+  const std::uint64_t split = FindBoundary(path, size / 2);
+  if (split == 0 || split >= size) return;
+  second = std::make_unique<SecondHalf>();
+  second->split = split;
+  SecondHalf* half = second.get();
+  const ReadOptions opts = options;
+  half->thread = std::thread([half, path, opts, split]() {
+    try {
+      // Line numbers: count the lines before the split (page-cache speed).
+      std::int64_t lines_before = 0;
+      {
+        std::FILE* fp = std::fopen(path.c_str(), "rb");
+        if (!fp) return;
+        std::vector<char> buf(std::size_t{1} << 22);
+        std::uint64_t left = split;
+        while (left > 0) {
+          const size_t want = static_cast<size_t>(std::min<std::uint64_t>(left, buf.size()));
+          const size_t got = std::fread(buf.data(), 1, want, fp);
+          if (got == 0) break;
+          lines_before += std::count(buf.data(), buf.data() + got, '\n');
+          left -= got;
+        }
+        std::fclose(fp);
+      }
+      ReadOptions worker_options = opts;
+      worker_options.parallel_min_bytes = 0;  // no recursion
+      Impl worker(path, worker_options);
+      worker.in.Seek(split);
+      worker.in.AddLines(lines_before);
+      worker.datasets_read = 1;  // past the "not a UFF file" checks of a file's start
+      worker.saw_content = true;
+      Dataset ds;
+      while (worker.Next(&ds)) {
+        half->datasets.push_back(std::move(ds));
+        half->end_positions.push_back(worker.in.Position());
+      }
+      half->notes = std::move(worker.file_notes);
+      half->ok = !half->datasets.empty() && half->datasets.front().offset == split;
+    } catch (...) {
+      half->ok = false;  // the sequential read will meet (and report) the same problem
+    }
+  });
+}
+
+// Called with the offset of each start delimiter the sequential parse finds: true when the worker's
+// datasets take over from here (the split is confirmed and the worker succeeded).
+bool Reader::Impl::SplitReached(std::uint64_t start_offset) {
+  if (!second || serving_second || start_offset < second->split) return false;
+  if (second->thread.joinable()) second->thread.join();
+  if (start_offset != second->split || !second->ok) {
+    second.reset();  // not a real boundary, or the worker failed: keep streaming
+    return false;
+  }
+  for (auto& note : second->notes) FileNote(std::move(note));
+  serving_second = true;
+  return true;
+}
+
 bool Reader::Impl::Next(Dataset* ds) {
+  if (serving_second) {
+    if (served >= second->datasets.size()) return false;
+    *ds = std::move(second->datasets[served++]);
+    ++datasets_read;
+    return true;
+  }
   std::string_view line;
   // BETWEEN: find a start delimiter.
   std::int64_t start_line = 0;
@@ -483,8 +614,10 @@ bool Reader::Impl::Next(Dataset* ds) {
     if (IsDelimiterLine(line)) {
       start_line = in.LineNumber();
       start_offset = in.LineStart();
+      if (SplitReached(start_offset)) return Next(ds);
       break;
     }
+    if (second && !serving_second && in.LineStart() > second->split) SplitReached(in.LineStart());  // passed it: discard
     if (!Trim(line).empty()) {
       if (datasets_read == 0 && junk == 0 && in.LineNumber() > 200)
         throw InputError(file + ":1", "not a UFF file: no '    -1' dataset delimiter in the first 200 lines");
@@ -910,12 +1043,22 @@ void Reader::Impl::ReadBinary58(std::string_view id_line, std::int64_t id_line_n
 
 // ------------------------------------------------------------------------------------------
 
-Reader::Reader(const std::filesystem::path& path, ReadOptions options) : impl_(std::make_unique<Impl>(path, options)) {}
+Reader::Reader(const std::filesystem::path& path, ReadOptions options) : impl_(std::make_unique<Impl>(path, options)) {
+  if (options.parallel_min_bytes > 0 && !options.headers_only && impl_->in.Size() >= options.parallel_min_bytes &&
+      impl_->in.Size() <= options.parallel_max_bytes &&
+      std::thread::hardware_concurrency() >= 2)
+    impl_->StartSecondHalf(path);
+}
 Reader::~Reader() = default;
 bool Reader::Next(Dataset* dataset) { return impl_->Next(dataset); }
 const std::vector<std::string>& Reader::FileNotes() const { return impl_->file_notes; }
 std::uint64_t Reader::FileSize() const { return impl_->in.Size(); }
-std::uint64_t Reader::Position() const { return impl_->in.Position(); }
+bool Reader::ServingParallelHalf() const { return impl_->serving_second; }
+std::uint64_t Reader::Position() const {
+  if (impl_->serving_second)
+    return impl_->served == 0 ? impl_->second->split : impl_->second->end_positions[impl_->served - 1];
+  return impl_->in.Position();
+}
 
 std::vector<Dataset> ReadFile(const std::filesystem::path& path, ReadOptions options) {
   Reader reader(path, options);

@@ -40,6 +40,14 @@ void CheckCurve(const std::vector<double>& x, const std::vector<double>& y, cons
   }
 }
 
+void CheckMicroSlip(const MicroSlipLaw& law, const std::string& where) {
+  if (!(law.k > 0.0) || !std::isfinite(law.k)) throw InputError(where, "micro_slip law needs k > 0, got " + Num(law.k));
+  if (!(law.slip_force > 0.0) || !std::isfinite(law.slip_force))
+    throw InputError(where, "micro_slip law needs slip_force > 0, got " + Num(law.slip_force));
+  if (law.elements < 1 || law.elements > 1000)
+    throw InputError(where, "micro_slip law needs elements in 1..1000, got " + std::to_string(law.elements));
+}
+
 struct ElementResponse {
   double deflection = 0.0;
   double stiffness = 0.0;
@@ -76,6 +84,8 @@ ElementResponse ElementAtForce(const Law& law, double f, const std::string& wher
     sum.stiffness = std::isfinite(compliance) && compliance > 0.0 ? 1.0 / compliance : 0.0;
     return sum;
   }
+  if (std::holds_alternative<MicroSlipLaw>(law.value))
+    throw InputError(where, "a micro_slip law cannot sit inside a series chain (it is hysteretic); give it its own spring");
   throw InputError(where, "a series chain may hold one air_film only, and not inside a nested series");
 }
 
@@ -201,6 +211,11 @@ SpringState LinearizeLaw(const Law& law, const std::string& where, double overri
     s.deflection = hertz->offset + pen;
     s.force = c * std::pow(pen, 1.5);
     s.stiffness = 2.0 * hertz->modulus * std::sqrt(hertz->radius * pen);
+    return s;
+  }
+  if (const auto* slip = std::get_if<MicroSlipLaw>(&law.value)) {
+    CheckMicroSlip(*slip, where);
+    s.stiffness = slip->k;  // stuck: linear until the first element slips
     return s;
   }
   const auto& series = std::get<SeriesLaw>(law.value);

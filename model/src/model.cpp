@@ -6,15 +6,24 @@
 namespace ema::model {
 
 std::string Law::KindName() const {
-  static const char* kNames[] = {"linear", "table", "air_film", "hertz", "series"};
+  static const char* kNames[] = {"linear", "table", "air_film", "hertz", "series", "micro_slip"};
   return kNames[value.index()];
 }
 
 bool Law::IsNonlinear() const {
-  if (std::holds_alternative<LinearLaw>(value)) return false;
+  if (std::holds_alternative<LinearLaw>(value) || std::holds_alternative<MicroSlipLaw>(value)) return false;
   if (const auto* series = std::get_if<SeriesLaw>(&value)) {
     return std::any_of(series->elements.begin(), series->elements.end(),
                        [](const Law& e) { return e.IsNonlinear(); });
+  }
+  return true;
+}
+
+bool Law::IsNonlinearInTime() const {
+  if (std::holds_alternative<LinearLaw>(value)) return false;
+  if (const auto* series = std::get_if<SeriesLaw>(&value)) {
+    return std::any_of(series->elements.begin(), series->elements.end(),
+                       [](const Law& e) { return e.IsNonlinearInTime(); });
   }
   return true;
 }

@@ -215,6 +215,7 @@ System Assemble(const Model& model, const SolveOptions& options) {
     }
     AddOuter(state.stiffness, g, &kt);
     sys.springs.push_back(std::move(state));
+    sys.spring_coefficients.push_back(std::move(g));
   }
   if (!model.fe.Empty()) {
     const int o = index.body_dofs;

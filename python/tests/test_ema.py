@@ -25,6 +25,8 @@ def test_fit_matches_cli_bit_for_bit(beam_fit):
         assert py["mpc"][r] == m["mpc"]
         assert py["mpd_deg"][r] == m["mpd_deg"]
         assert py["mcf"][r] == m["mcf"]
+        assert py["frequency_std_hz"][r] == m["frequency_std_hz"]
+        assert py["damping_ratio_std"][r] == m["damping_ratio_std"]
         assert py["order"][r] == m["order"]
         for i, v in enumerate(m["shape"]):
             assert py["dofs"][i] == (v["node"], v["dir"])

@@ -256,8 +256,16 @@ TEST_F(RealChain, GuidewayWithMountsHiddenRanksSeriesComplianceOnBearings) {
   }
   const json d = Diagnose(sample / "model.toml", tests, "gw");
   const json& first = d["candidates"][0];
-  EXPECT_EQ(first["kind"], "series_compliance") << d["explanation"];
-  EXPECT_EQ(first["target"], "bearings") << d["explanation"];
+  // Since `ema fit` reports exactly the five modes per setup (issue 18), the mount compliance may
+  // come paired with the roving sensors' mass (4 × 11.2 g on 2.88 kg: mass_scale ~1.016), which
+  // the model does not carry; the compliance on the bearings must lead either way.
+  if (first["kind"] == "series_compliance+mass_scale") {
+    EXPECT_EQ(first["target"], "bearings+carriage") << d["explanation"];
+    EXPECT_NEAR(first["parameters"]["mass_scale.factor"].get<double>(), 1.016, 0.015) << d["explanation"];
+  } else {
+    EXPECT_EQ(first["kind"], "series_compliance") << d["explanation"];
+    EXPECT_EQ(first["target"], "bearings") << d["explanation"];
+  }
   EXPECT_LT(first["mean_abs_frequency_error_pct"].get<double>(), 2.0);
   EXPECT_GT(d["baseline"]["mean_abs_frequency_error_pct"].get<double>(), 50.0);
   // -o wrote the model with the effect appended and the rest kept.

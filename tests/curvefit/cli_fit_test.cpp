@@ -52,7 +52,15 @@ TEST_F(FitCli, MeasuredBeamWritesEveryOutput) {
     ASSERT_EQ(m.at("shape").size(), 3u);
     EXPECT_EQ(m["shape"][0].at("dir").get<std::string>(), "+X");
     EXPECT_EQ(m["shape"][0].at("value").size(), 2u);
+    // cli.md "Uncertainty": 1 sigma from the data's noise, small against the value (the beam's
+    // FRFs are clean: sigma_f well below 0.1 % of f).
+    ASSERT_TRUE(m.at("frequency_std_hz").is_number());
+    ASSERT_TRUE(m.at("damping_ratio_std").is_number());
+    EXPECT_GT(m["frequency_std_hz"].get<double>(), 0.0);
+    EXPECT_LT(m["frequency_std_hz"].get<double>(), 1e-3 * expected[r]);
   }
+  EXPECT_EQ(j.at("refinement").at("method"), "ml");
+  EXPECT_EQ(j.at("modal_model").at("frfs").size(), 3u);  // 3 hammer points x 1 sensor
   std::ifstream sin(stab);
   const nlohmann::json s = nlohmann::json::parse(sin);
   EXPECT_EQ(s.at("orders").size(), 120u);  // default: 120 orders for one reference
@@ -96,6 +104,7 @@ TEST_F(FitCli, BadInputAndUsage) {
   EXPECT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --band 10"), 2);
   EXPECT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --plot x.pdf"), 2);
   EXPECT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --method lscf"), 2);
+  EXPECT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --refine maybe"), 2);
   EXPECT_EQ(RunEma("fit " + sample_), 2);  // -o missing
 }
 
@@ -148,18 +157,20 @@ TEST_F(FitOptions, StabilityTolerancesChangeTheLabels) {
   const auto n0 = Labels(base);
   EXPECT_EQ(base.at("criteria").at("frequency_tol"), 0.01);
   ASSERT_GT(n0.count("s") ? n0.at("s") : 0, 30) << "the beam's three modes are stable over most orders";
-  // Nothing is within 1e-9 in frequency from one order to the next: no pole is stable at all.
-  const auto [m1, tight_f] = Fit("f", "--freq-tol 1e-9");
+  // Nothing is within 1e-9 in frequency from one order to the next: no pole is stable at all, so
+  // automatic selection finds no mode (exit 1); a mode asked for by frequency still comes out.
+  EXPECT_EQ(RunEma("fit " + sample_ + " -o " + (dir_ / "none.unv").string() + " --band 30:300 --order-max 40 --freq-tol 1e-9"), 1);
+  const auto [m1, tight_f] = Fit("f", "--freq-tol 1e-9 --select 51.5");
   const auto n1 = Labels(tight_f);
   EXPECT_DOUBLE_EQ(tight_f.at("criteria").at("frequency_tol").get<double>(), 1e-9);
   EXPECT_EQ(n1.count("s") + n1.count("d") + n1.count("v") + n1.count("f"), 0u);
   // A damping tolerance of 1e-9: the frequency-stable poles lose their 'd'/'s' label for 'f'/'v'.
-  const auto [m2, tight_d] = Fit("d", "--damping-tol 1e-9");
+  const auto [m2, tight_d] = Fit("d", "--damping-tol 1e-9 --select 51.5");
   const auto n2 = Labels(tight_d);
   EXPECT_EQ(n2.count("s") + n2.count("d"), 0u);
   EXPECT_EQ(n2.at("v"), n0.at("s") + (n0.count("v") ? n0.at("v") : 0)) << "every s pole becomes v";
   // MAC of 1 - 1e-12 between orders is out of reach: every 's' becomes 'd'.
-  const auto [m3, tight_mac] = Fit("mac", "--mac-min 0.999999999999");
+  const auto [m3, tight_mac] = Fit("mac", "--mac-min 0.999999999999 --select 51.5");
   const auto n3 = Labels(tight_mac);
   EXPECT_EQ(n3.count("s"), 0u);
   EXPECT_EQ(n3.at("d"), n0.at("s") + (n0.count("d") ? n0.at("d") : 0));
@@ -199,6 +210,22 @@ TEST_F(FitOptions, MpcAndMpdMatchAHandComputationFromTheWrittenShapes) {
     // The beam's modes are nearly real (ζ < 0.1 %): MPD under 2°.
     EXPECT_LT(mode.at("mpd_deg").get<double>(), 2.0);
   }
+}
+
+TEST_F(FitCli, NarrowBandFindsTheModeOrExitsOneNeverZeroWithoutAMode) {
+  // 26 lines around the 52 Hz mode: found (issue 14, narrow-band selection).
+  const fs::path unv = dir_ / "narrow.unv", json = dir_ / "narrow.json";
+  ASSERT_EQ(RunEma("fit " + sample_ + " -o " + unv.string() + " --band 40:65 --json " + json.string()), 0);
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_EQ(j.at("modes").size(), 1u);
+  EXPECT_NEAR(j["modes"][0].at("frequency_hz").get<double>(), 52.0, 0.015 * 52.0);  // as the full-band test
+  // A band between modes (90..100 Hz, 11 lines) holds none: exit 1 and nothing written, for
+  // PolyMAX and for peak picking alike.
+  const fs::path none = dir_ / "none.unv";
+  EXPECT_EQ(RunEma("fit " + sample_ + " -o " + none.string() + " --band 90:100"), 1);
+  EXPECT_EQ(RunEma("fit " + sample_ + " -o " + none.string() + " --band 90:100 --method peak"), 1);
+  EXPECT_FALSE(fs::exists(none));
 }
 
 }  // namespace

@@ -262,3 +262,40 @@ TEST(ModelFile, WriteWithEffectsKeepsFileAndRoundTrips) {
 
 }  // namespace
 }  // namespace ema::model
+
+namespace ema::model {
+namespace {
+
+TEST(ModelFile, MicroSlipLawReadsAndWritesBack) {
+  const fs::path dir = testing::TempDir("micro_slip_file");
+  const std::string text = R"(
+[[body]]
+name = "b"
+mass = 1.0
+inertia = [0.01, 0.01, 0.01]
+
+[[spring]]
+name = "J"
+group = "joints"
+a = { body = "b" }
+b = { body = "ground" }
+direction = [0.0, 0.0, 1.0]
+law = { micro_slip = { k = 2.0e6, slip_force = 4.5, elements = 20 } }
+)";
+  const Model m = formats::ReadModelFile(testing::WriteText(dir / "m.toml", text));
+  const auto* law = std::get_if<MicroSlipLaw>(&m.springs.at(0).law.value);
+  ASSERT_NE(law, nullptr);
+  EXPECT_DOUBLE_EQ(law->k, 2.0e6);
+  EXPECT_DOUBLE_EQ(law->slip_force, 4.5);
+  EXPECT_EQ(law->elements, 20);
+  EXPECT_EQ(formats::LawToToml(m.springs[0].law), "{ micro_slip = { k = 2000000.0, slip_force = 4.5, elements = 20 } }");
+  std::string bad = text;
+  bad.replace(bad.find("elements = 20"), 13, "elements = 0");
+  EXPECT_THROW(formats::ReadModelFile(testing::WriteText(dir / "bad.toml", bad)), InputError);
+  bad = text;
+  bad.replace(bad.find("slip_force"), 10, "slip_forse");
+  EXPECT_THROW(formats::ReadModelFile(testing::WriteText(dir / "bad2.toml", bad)), InputError);
+}
+
+}  // namespace
+}  // namespace ema::model

@@ -151,3 +151,75 @@ TEST(Laws, ChainWithoutEquilibriumInRangeIsInputError) {
 
 }  // namespace
 }  // namespace ema::model
+
+// ---- micro_slip and laws in time (issue 14) ----
+#include "ema/model/law_force.hpp"
+
+namespace ema::model {
+namespace {
+
+TEST(MicroSlip, LinearisedStiffnessIsTheStuckStiffness) {
+  const SpringState s = LinearizeLaw(Law(MicroSlipLaw{2.0e6, 5.0, 10}), "here");
+  EXPECT_DOUBLE_EQ(s.stiffness, 2.0e6);
+  EXPECT_FALSE(Law(MicroSlipLaw{2.0e6, 5.0, 1}).IsNonlinear());  // no operating point to set
+  EXPECT_TRUE(Law(MicroSlipLaw{2.0e6, 5.0, 1}).IsNonlinearInTime());
+  EXPECT_THROW(LinearizeLaw(Law(MicroSlipLaw{0.0, 5.0, 1}), "here"), InputError);
+  EXPECT_THROW(LinearizeLaw(Law(MicroSlipLaw{1.0e6, -1.0, 1}), "here"), InputError);
+}
+
+TEST(MicroSlip, JenkinsLoopDissipatesFourFsTimesTheSlip) {
+  // k = 1 N/um, Fs = 2 N: slips beyond 2 um. A cycle of amplitude 5 um: the loop is a
+  // parallelogram of area 4 Fs (A - Fs/k) = 4 * 2 * 3e-6 = 24 uJ.
+  const Law law(MicroSlipLaw{1.0e6, 2.0, 1});
+  LawForce f(law, LinearizeLaw(law, "j"), 1e-5, 1.0, "j");
+  EXPECT_DOUBLE_EQ(f.Force(1e-6), 1.0);  // stuck
+  EXPECT_DOUBLE_EQ(f.Force(5e-6), 2.0);  // slipping: capped at Fs
+  double work = 0.0, c_prev = 0.0, f_prev = 0.0;
+  const int steps = 4000;
+  for (int cycle = 0; cycle < 2; ++cycle)
+    for (int i = 1; i <= steps; ++i) {
+      const double c = 5e-6 * std::sin(kTwoPi * i / steps);
+      const double force = f.Force(c);
+      if (cycle == 1) work += 0.5 * (force + f_prev) * (c - c_prev);
+      f.Commit(c);
+      c_prev = c, f_prev = force;
+    }
+  EXPECT_NEAR(work, 24e-6, 0.01 * 24e-6);  // 1 %: trapezoidal work over 4000 steps
+}
+
+TEST(MicroSlip, IwanSlipsGraduallyAndReachesTheMacroSlipForce) {
+  const Law law(MicroSlipLaw{1.0e6, 6.0, 50});
+  LawForce f(law, LinearizeLaw(law, "j"), 1e-4, 1.0, "j");
+  // u_max = 2 n Fs / (k (n + 1)) = 11.76 um; all elements slip beyond it: force = Fs.
+  EXPECT_NEAR(f.Force(20e-6), 6.0, 1e-12);
+  // At 1 um the first 4 elements (slip at 0.235 um steps) have slipped: force below k c.
+  EXPECT_LT(f.Force(1e-6), 1.0);
+  EXPECT_GT(f.Force(1e-6), 0.9);
+  EXPECT_DOUBLE_EQ(f.Stiffness(), 1.0e6);
+}
+
+TEST(LawForce, HertzAndTableMatchTheirLinearisedStiffnessAtTheOperatingPoint) {
+  HertzLaw h;
+  h.modulus = 2e10;
+  h.radius = 5e-3;
+  h.operating_force = 50.0;
+  const Law hertz(h);
+  const SpringState hs = LinearizeLaw(hertz, "h");
+  LawForce hf(hertz, hs, 1e-6, 1.0, "h");
+  const double dc = 1e-10;
+  EXPECT_NEAR((hf.Force(dc) - hf.Force(-dc)) / (2 * dc), hs.stiffness, 1e-5 * hs.stiffness);
+  EXPECT_NEAR(hf.Force(-1.0), -50.0, 1e-9);  // contact lost: the preload is gone, nothing more
+  TableLaw t;
+  t.deflection = {0.0, 1e-6, 2e-6, 3e-6};
+  t.force = {0.0, 10.0, 30.0, 60.0};
+  t.operating_deflection = 1.5e-6;
+  const Law table(t);
+  const SpringState ts = LinearizeLaw(table, "t");
+  LawForce tf(table, ts, 1.5e-6, 1.0, "t");
+  // Tabulated on 801 points over ±1.5 um: the slope at 0 within 1 %.
+  EXPECT_NEAR((tf.Force(5e-9) - tf.Force(-5e-9)) / 1e-8, ts.stiffness, 0.01 * ts.stiffness);
+  EXPECT_NEAR(tf.Force(1.5e-6), 60.0 - ts.force, 1e-9);  // the grid ends on the table's last point
+}
+
+}  // namespace
+}  // namespace ema::model

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <complex>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "ema/core/types.hpp"
@@ -89,6 +90,10 @@ struct HammerTestPlan {
   int oversampling = 8;                      ///< fine-grid factor before the anti-alias FIR
   std::vector<DoubleHit> double_hits;
   std::vector<Clipping> clipping;
+  /// Several hammer force levels (N): impacts_per_reference impacts at each level, numbered on
+  /// from one level to the next (level 1: 1..n, level 2: n+1..2n, ...), each peak spread by
+  /// force_spread. Empty: one level, force_peak_n.
+  std::vector<double> force_levels_n;
   std::uint64_t seed = 1;
   /// true: impact numbers continue across sets in SimulateHammerTest (one flat record list can
   /// then hold several sets unambiguously); SimulateHammerTestSets always numbers 1..n per set.
@@ -119,5 +124,17 @@ struct ImpactSignals {
 ImpactSignals SimulateImpact(const ModalTruth& truth, const Dof& ref, const std::vector<Dof>& responses,
                              const std::vector<std::pair<double, double>>& pulses, double pulse_duration_s,
                              double sample_rate_hz, int samples, Quantity quantity, int oversampling = 8);
+
+/// Simulates one noise-free impact: hammer DOF, response DOFs, pulses (start time s, peak N).
+using ImpactFunction = std::function<ImpactSignals(const Dof& ref, const std::vector<Dof>& responses,
+                                                   const std::vector<std::pair<double, double>>& pulses)>;
+
+/// As SimulateHammerTestSets / SimulateHammerTest (noise, double hits, clipping, force levels,
+/// numbering), with each impact simulated by `impact_per_set` (one function, or one per roving
+/// set): e.g. SimulateImpactInTime for structures with non-linear elements.
+std::vector<SimulatedSet> SimulateHammerTestSetsWith(const std::vector<ImpactFunction>& impact_per_set,
+                                                     const HammerTestPlan& plan);
+std::vector<TimeRecord> SimulateHammerTestWith(const std::vector<ImpactFunction>& impact_per_set,
+                                               const HammerTestPlan& plan);
 
 }  // namespace ema::acquisition

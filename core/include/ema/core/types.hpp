@@ -130,6 +130,9 @@ struct Mode {
   double mcf = kNaN;                   ///< mode complexity factor 1 - MPC(eigen form), 0 = real mode
   double frequency_spread_hz = kNaN;   ///< std. dev. of the stable-pole cluster
   double damping_spread = kNaN;        ///< std. dev. of the cluster's damping ratio
+  double frequency_std_hz = kNaN;      ///< 1 sigma of frequency_hz from the data's noise (ML refinement)
+  double damping_ratio_std = kNaN;     ///< 1 sigma of damping_ratio
+  Eigen::VectorXd shape_std;           ///< 1 sigma of |shape| per DOF (empty when unknown)
   bool unit_modal_mass = false;        ///< shape scaled to unit modal mass
 };
 

@@ -9,6 +9,7 @@
 #include "ema/core/types.hpp"
 #include "ema/curvefit/fit_data.hpp"
 #include "ema/curvefit/lsfd.hpp"
+#include "ema/curvefit/ml_refine.hpp"
 #include "ema/curvefit/peak.hpp"
 #include "ema/curvefit/polymax.hpp"
 #include "ema/curvefit/stabilisation.hpp"
@@ -16,6 +17,25 @@
 namespace ema::curvefit {
 
 enum class FitMethod { kPolymax, kPeak };
+
+/// Automatic selection's check for one mode fitted as two poles (roving-set inconsistency).
+struct SplitPoleOptions {
+  bool enabled = true;
+  /// Two poles with overlapping half-power bands whose participation vectors (m >= 2) have at
+  /// least this MAC are excited alike by the references...
+  double participation_mac_min = 0.9;
+  /// ...and whose |shape|^2 distributions (each summing to 1) share at most this much
+  /// (sum over outputs of the smaller share) live on different outputs: one mode, two poles.
+  double support_overlap_max = 0.35;
+};
+
+/// A pole automatic selection picked and then dropped, with the reason (MODES.json "dropped").
+struct DroppedPole {
+  double frequency_hz = 0.0;
+  double damping_ratio = 0.0;
+  double merged_into_hz = kNaN;  ///< the kept pole it duplicated
+  std::string reason;
+};
 
 struct FitOptions {
   FitMethod method = FitMethod::kPolymax;
@@ -26,13 +46,48 @@ struct FitOptions {
   std::vector<double> select_frequencies_hz;  ///< --select F1,F2,..; empty = automatic
   LsfdOptions lsfd;
   PeakOptions peak;
+  /// Narrow band: with at most this many lines in the band (few lines support few orders),
+  /// automatic selection is also tried with relaxed criteria (SelectPolesNarrowBand), and that
+  /// result is kept when it finds more modes. 0 = never.
+  int narrow_band_max_lines = 100;
+  /// `--refine`: ML refinement of the selected poles (default), or none (PolyMAX/LSFD values kept,
+  /// their sigma still estimated at the PolyMAX poles).
+  RefineMethod refine = RefineMethod::kMl;
+  MlRefineOptions ml;
+  SplitPoleOptions split_poles;  ///< automatic selection only
 };
+
+/// The narrow-band retry of automatic selection: stability labels recomputed with the damping
+/// criterion relaxed to 20 % and clusters needing 3 orders instead of 4. Empty when the band
+/// holds more than options.narrow_band_max_lines lines or the retry finds nothing; `note`
+/// (optional) gets the warning that says what was relaxed.
+std::vector<SelectedPole> SelectPolesNarrowBand(const StabilisationDiagram& diagram, const FitOptions& options,
+                                                std::string* note = nullptr);
+
+/// The modal model the fit produced, in the fitting orientation (FitData): FRF column c = o·m + i
+/// is from reference `references[i]` to output `outputs[o]` (swapped back to the measured
+/// orientation by reciprocity when `transposed`). Evaluate with SynthesiseFrf.
+struct ModalModel {
+  std::vector<Dof> outputs;
+  std::vector<Dof> references;
+  bool transposed = false;
+  FrfType frf_type = FrfType::kAccelerance;
+  double band_lo_hz = 0.0, band_hi_hz = 0.0;
+  std::vector<std::complex<double>> poles_fitted;  ///< rad/s as the FRFs carry them (window included)
+  Eigen::MatrixXcd residues;                       ///< (l·m) × N receptance residues (LSFD, phi l^T)
+  Eigen::VectorXd lower_residual, upper_residual;  ///< l·m real residual terms (algorithms.md §1.9)
+};
+
+/// The model's FRF from reference i to output o (FitData indices) at `frequency_hz`.
+Eigen::VectorXcd SynthesiseFrf(const ModalModel& model, int output, int reference, const Eigen::VectorXd& frequency_hz);
 
 /// Seconds; stage figures are CPU times of the calling thread (see PolymaxTiming).
 struct FitTiming {
   PolymaxTiming polymax;
   double stabilisation_and_selection = 0.0;
   double lsfd = 0.0;
+  double refine = 0.0;  ///< ML refinement (CPU of the calling thread; its worker threads not included)
+  double refine_wall = 0.0;
   double total = 0.0;  ///< wall
 };
 
@@ -44,6 +99,9 @@ struct FitResult {
   bool transposed = false;
   std::vector<std::string> warnings;
   FitTiming timing;
+  MlRefineSummary refine;             ///< what the refinement did (termination kFailed when not run)
+  ModalModel model;                   ///< poles, residues and residual terms behind `modes`
+  std::vector<DroppedPole> dropped;   ///< selected poles dropped as duplicates of a kept mode
 };
 
 /// `source` names the input in messages. Throws InputError for bad input (see PrepareFitData and

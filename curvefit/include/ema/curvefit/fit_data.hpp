@@ -21,6 +21,10 @@ struct FitData {
   Eigen::MatrixXcd h;
   Eigen::VectorXd line_weight;     ///< 1 for used lines, 0 for skipped (NaN) lines
   Eigen::VectorXd output_weight;   ///< per output: 1/RMS over the band and references
+  /// n_lines × (l·m): variance E|dH|^2 of each FRF line from its coherence and averages,
+  /// |H|^2 (1 - coh) / (n_avg coh) (algorithms.md §1.8); NaN where unknown (coherence missing or
+  /// not in (0, 1], fewer than 2 averages). Empty when the set carries no coherence at all.
+  Eigen::MatrixXd noise_variance;
   FrfType frf_type = FrfType::kAccelerance;
   double window_decay_rate = 0.0;  ///< 1/tau, added to every estimated pole (algorithms.md §1.4)
   bool transposed = false;         ///< roles swapped by reciprocity (roving hammer)

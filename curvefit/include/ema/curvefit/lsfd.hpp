@@ -20,6 +20,8 @@ struct LsfdOptions {
 struct LsfdResult {
   ModeSet modes;                     ///< one mode per pole, shapes at FitData::outputs
   Eigen::MatrixXcd residues;         ///< (l·m) × N receptance residues phi_or·l_ir (column per mode)
+  Eigen::VectorXd lower_residual;    ///< l·m real lower residual terms LR_oi (0 when not fitted), §1.9 form
+  Eigen::VectorXd upper_residual;    ///< l·m real upper residual terms UR_oi (0 when not fitted)
   double synthesis_error = 0.0;      ///< ||H - H_fit|| / ||H|| over the band (weighted as fitted)
   std::vector<std::string> warnings; ///< e.g. driving-point residues of the wrong sign
 };

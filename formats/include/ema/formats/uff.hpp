@@ -170,6 +170,13 @@ struct ReadOptions {
   /// Accept a 58 whose values end (at its closing delimiter or EOF) before the N of record 7:
   /// keep what was read, reduce N and add a note. Default: error "truncated, got m of M".
   bool allow_truncated = false;
+  /// Files at least this big are parsed on two threads (the second half from a dataset boundary
+  /// near the middle, verified against the sequential parse; results, notes and errors are exactly
+  /// those of a one-thread read). 0 = always one thread. Not used with headers_only.
+  std::uint64_t parallel_min_bytes = std::uint64_t{32} << 20;
+  /// ...and at most this big: the worker holds the second half in memory until it is handed out,
+  /// so a bigger file is streamed on one thread (bounded memory).
+  std::uint64_t parallel_max_bytes = std::uint64_t{2} << 30;
 };
 
 /// Streaming dataset reader. Throws ema::InputError("file:line: dataset N record R: ...").
@@ -186,6 +193,8 @@ class Reader {
   const std::vector<std::string>& FileNotes() const;
   std::uint64_t FileSize() const;
   std::uint64_t Position() const;
+  /// True once the datasets come from the second thread (see ReadOptions::parallel_min_bytes).
+  bool ServingParallelHalf() const;
 
  private:
   struct Impl;

@@ -63,20 +63,37 @@ struct SeriesLaw {
   std::optional<double> force;    ///< N, chain force when there is no air film
 };
 
+/// Micro-slip joint (a bolted or clamped interface loaded along its slip direction): a Jenkins
+/// element, a spring of stiffness k in series with a Coulomb slider that slips at slip_force,
+/// or with `elements` > 1 an Iwan element: that many Jenkins elements in parallel, each of
+/// stiffness k/elements, whose slip displacements are spread evenly up to u_max so that their
+/// slip forces sum to slip_force (the macro-slip force). Below the first slip the joint is
+/// stuck and linear with stiffness k: the eigen-solution uses k. It is hysteretic, so only a
+/// time integration (ema simulate with integration = "time") sees the slip: the frequency falls
+/// and the damping rises with the amplitude. See docs/model.md.
+struct MicroSlipLaw {
+  double k = 0.0;           ///< stuck stiffness, N/m (N m/rad rotational)
+  double slip_force = 0.0;  ///< N (N m): force at which the joint slips as a whole (macro-slip)
+  int elements = 1;         ///< 1 = Jenkins; > 1 = Iwan with that many parallel Jenkins elements
+};
+
 /// One interface law (the variant of every law kind of model-format.md).
 struct Law {
-  std::variant<LinearLaw, TableLaw, AirFilmLaw, HertzLaw, SeriesLaw> value;
+  std::variant<LinearLaw, TableLaw, AirFilmLaw, HertzLaw, SeriesLaw, MicroSlipLaw> value;
 
   Law() = default;
   template <typename T>
     requires(!std::is_same_v<std::decay_t<T>, Law>)
   Law(T law) : value(std::move(law)) {}  // NOLINT: implicit on purpose (Law l = LinearLaw{k})
 
-  /// "linear", "table", "air_film", "hertz", "series".
+  /// "linear", "table", "air_film", "hertz", "series", "micro_slip".
   std::string KindName() const;
-  /// True for every law whose stiffness depends on an operating point (all but linear, and a
-  /// series chain only when one of its elements is non-linear).
+  /// True for every law whose stiffness depends on an operating point (all but linear and
+  /// micro_slip, and a series chain only when one of its elements is non-linear).
   bool IsNonlinear() const;
+  /// True when the force is not a linear function of the deflection in time (every law but
+  /// linear; a series chain when one of its elements is): what ema simulate integrates.
+  bool IsNonlinearInTime() const;
 };
 
 /// Rigid body, 6 DOF (ux uy uz rx ry rz) at its centre of mass.

@@ -54,6 +54,10 @@ struct System {
   Eigen::SparseMatrix<double> stiffness;
   std::vector<std::string> dof_names;   ///< "carriage:ux", "fe:1234:uz"
   std::vector<SpringState> springs;
+  /// Per spring (model order): its deflection δ = Σ coefficient × DOF, n·(u_a − u_b) along its
+  /// direction (about it for rotational springs); the stiffness matrix holds k g gᵀ. Entries
+  /// may repeat a DOF (add them).
+  std::vector<std::vector<std::pair<int, double>>> spring_coefficients;
   /// Rows: test point x (+X,+Y,+Z), in ModeSet::dofs order; columns: system DOFs.
   Eigen::SparseMatrix<double> observation;
   std::vector<Dof> observed_dofs;
