@@ -16,6 +16,7 @@
 #include "ema/acquisition/hammer_test.hpp"
 #include "ema/core/error.hpp"
 #include "ema/correlation/correlate.hpp"
+#include "ema/correlation/diagnose.hpp"
 #include "ema/correlation/mac.hpp"
 #include "ema/curvefit/complexity.hpp"
 #include "ema/curvefit/fit.hpp"
@@ -241,6 +242,35 @@ std::pair<double, double> Band(const py::object& band) {
 /// nlohmann::json to Python via the json module (plain dict/list/float/None).
 py::object FromJson(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
+// The diagnosis API (one alias, so a move of the module changes one line).
+namespace dg = ema::correlation;
+
+py::object Num(double v) { return std::isfinite(v) ? py::object(py::float_(v)) : py::object(py::none()); }
+
+py::dict CandidateDict(const dg::Candidate& c) {
+  py::dict d, parameters, uncertainty;
+  const bool pair = c.effects.size() > 1;
+  for (const auto& p : c.parameters) {
+    const std::string key = pair ? p.effect_kind + "." + p.name : p.name;
+    parameters[py::str(key)] = p.value;
+    uncertainty[py::str(key)] = Num(p.sigma);
+  }
+  d["rank"] = c.rank;
+  d["kind"] = c.kind;
+  d["target"] = c.target;
+  d["parameters"] = parameters;
+  d["uncertainty"] = uncertainty;
+  d["mean_abs_frequency_error_pct"] = Num(c.mean_abs_frequency_error_pct);
+  d["mean_mac"] = Num(c.mean_mac);
+  d["score"] = Num(c.score);
+  d["cost"] = Num(c.cost);
+  d["explained_pct"] = Num(c.explained_pct);
+  d["paired_modes"] = c.paired_modes;
+  d["plausible"] = c.plausible;
+  d["description"] = dg::DescribeCandidate(c);
+  return d;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(ema, m) {
@@ -392,6 +422,37 @@ PYBIND11_MODULE(ema, m) {
       py::arg("test"), py::arg("model"), py::arg("mac_min") = ema::correlation::CorrelationOptions{}.pairing.mac_min,
       "Test modes against model modes as `ema correlate` (paths or modes dicts): MAC matrix on the shared DOFs,\n"
       "pairing, agreement % = 100 (1 - |f_model - f_test| / f_model); unpaired modes are 0-based indices.");
+
+  m.def(
+      "diagnose",
+      [](const std::string& model_path, const py::dict& tests, const std::string& criterion) {
+        const ema::model::Model model = ema::formats::ReadModelFile(model_path);
+        std::vector<dg::SetupModes> sets;
+        for (auto item : tests) sets.push_back({item.first.cast<std::string>(), ToModeSet(py::reinterpret_borrow<py::object>(item.second))});
+        dg::DiagnoseOptions opt;
+        if (criterion == "bic") opt.criterion = dg::InformationCriterion::kBic;
+        else if (criterion == "aicc") opt.criterion = dg::InformationCriterion::kAicc;
+        else throw py::value_error("criterion: expected 'bic' or 'aicc'");
+        dg::Diagnosis d;
+        {
+          py::gil_scoped_release release;
+          d = dg::Diagnose(model, sets, opt);
+        }
+        py::list candidates;
+        for (const auto& c : d.candidates) candidates.append(CandidateDict(c));
+        py::dict out;
+        out["baseline"] = CandidateDict(d.baseline);
+        out["candidates"] = candidates;
+        out["explanation"] = d.explanation;
+        out["residual_count"] = d.residual_count;
+        out["test_modes"] = d.test_mode_count;
+        return out;
+      },
+      py::arg("model"), py::arg("tests"), py::arg("criterion") = "bic",
+      "Which physical effect is the model missing? As `ema diagnose`: `tests` maps a setup name ('' for the\n"
+      "nominal model) to its test modes (path or modes dict). Every candidate effect is fitted and ranked by\n"
+      "the information criterion; returns {'candidates': [{rank, kind, target, parameters, uncertainty,\n"
+      "mean_abs_frequency_error_pct, mean_mac, score, description}, ...] (rank 1 first), 'baseline', ...}.");
 
   m.def(
       "quality",
