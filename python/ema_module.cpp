@@ -16,7 +16,14 @@
 #include "ema/acquisition/hammer_test.hpp"
 #include "ema/core/error.hpp"
 #include "ema/correlation/correlate.hpp"
+// The diagnosis moved from correlation/ to its own module (diagnose/); build against either.
+#if __has_include("ema/diagnose/diagnose.hpp")
+#include "ema/diagnose/diagnose.hpp"
+#define EMA_PY_DIAGNOSE_MODULE 1
+#else
 #include "ema/correlation/diagnose.hpp"
+#define EMA_PY_DIAGNOSE_MODULE 0
+#endif
 #include "ema/correlation/mac.hpp"
 #include "ema/curvefit/complexity.hpp"
 #include "ema/curvefit/fit.hpp"
@@ -242,18 +249,27 @@ std::pair<double, double> Band(const py::object& band) {
 /// nlohmann::json to Python via the json module (plain dict/list/float/None).
 py::object FromJson(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
-// The diagnosis API (one alias, so a move of the module changes one line).
+#if EMA_PY_DIAGNOSE_MODULE
+namespace dg = ema::diagnose;
+#else
 namespace dg = ema::correlation;
+#endif
 
 py::object Num(double v) { return std::isfinite(v) ? py::object(py::float_(v)) : py::object(py::none()); }
 
 py::dict CandidateDict(const dg::Candidate& c) {
   py::dict d, parameters, uncertainty;
-  const bool pair = c.effects.size() > 1;
-  for (const auto& p : c.parameters) {
-    const std::string key = pair ? p.effect_kind + "." + p.name : p.name;
-    parameters[py::str(key)] = p.value;
-    uncertainty[py::str(key)] = Num(p.sigma);
+#if EMA_PY_DIAGNOSE_MODULE
+  const std::vector<std::string> keys = dg::ParameterKeys(c);
+  d["probability"] = Num(c.probability);
+  d["mean_agreement_pct"] = Num(c.mean_agreement_pct);
+#else
+  std::vector<std::string> keys;
+  for (const auto& p : c.parameters) keys.push_back(c.effects.size() > 1 ? p.effect_kind + "." + p.name : p.name);
+#endif
+  for (size_t i = 0; i < c.parameters.size() && i < keys.size(); ++i) {
+    parameters[py::str(keys[i])] = c.parameters[i].value;
+    uncertainty[py::str(keys[i])] = Num(c.parameters[i].sigma);
   }
   d["rank"] = c.rank;
   d["kind"] = c.kind;
@@ -430,9 +446,14 @@ PYBIND11_MODULE(ema, m) {
         std::vector<dg::SetupModes> sets;
         for (auto item : tests) sets.push_back({item.first.cast<std::string>(), ToModeSet(py::reinterpret_borrow<py::object>(item.second))});
         dg::DiagnoseOptions opt;
+#if EMA_PY_DIAGNOSE_MODULE
+        if (!criterion.empty() && !dg::StringToCriterion(criterion, &opt.criterion))
+          throw py::value_error("criterion: '" + criterion + "' is not one ema diagnose --criterion takes");
+#else
         if (criterion == "bic") opt.criterion = dg::InformationCriterion::kBic;
         else if (criterion == "aicc") opt.criterion = dg::InformationCriterion::kAicc;
-        else throw py::value_error("criterion: expected 'bic' or 'aicc'");
+        else if (!criterion.empty()) throw py::value_error("criterion: expected 'bic' or 'aicc'");
+#endif
         dg::Diagnosis d;
         {
           py::gil_scoped_release release;
@@ -448,10 +469,10 @@ PYBIND11_MODULE(ema, m) {
         out["test_modes"] = d.test_mode_count;
         return out;
       },
-      py::arg("model"), py::arg("tests"), py::arg("criterion") = "bic",
+      py::arg("model"), py::arg("tests"), py::arg("criterion") = "",
       "Which physical effect is the model missing? As `ema diagnose`: `tests` maps a setup name ('' for the\n"
       "nominal model) to its test modes (path or modes dict). Every candidate effect is fitted and ranked by\n"
-      "the information criterion; returns {'candidates': [{rank, kind, target, parameters, uncertainty,\n"
+      "the criterion (criterion='' = the CLI's default); returns {'candidates': [{rank, kind, target, parameters, uncertainty,\n"
       "mean_abs_frequency_error_pct, mean_mac, score, description}, ...] (rank 1 first), 'baseline', ...}.");
 
   m.def(
