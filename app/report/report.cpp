@@ -182,7 +182,9 @@ json TestModeTable(const json& test_modes) {
                     {"frequency_std_hz", number(m, "frequency_std_hz")},
                     {"damping_ratio", number(m, "damping_ratio")},
                     {"damping_ratio_std", number(m, "damping_ratio_std")},
-                    {"mpc", number(m, "mpc")}});
+                    {"mpc", number(m, "mpc")},
+                    {"mpd_deg", number(m, "mpd_deg")},
+                    {"mcf", number(m, "mcf")}});
   out["modes"] = rows;
   if (test_modes.contains("refinement")) out["refinement"] = test_modes["refinement"];
   if (test_modes.contains("dropped")) out["dropped"] = test_modes["dropped"];

@@ -308,9 +308,9 @@
         return fmt(v === null ? v : scale * v, digits) + (s === null || s === undefined ? '' : ' ± ' +
           Number(scale * s).toPrecision(2));
       };
-      table(tms, ['mode', 'f ± σ (Hz)', 'ζ ± σ (%)', 'MPC'], tm.modes.map(function (m, i) {
+      table(tms, ['mode', 'f ± σ (Hz)', 'ζ ± σ (%)', 'MPC', 'MPD (deg)', 'MCF'], tm.modes.map(function (m, i) {
         return [i + 1, pm(m.frequency_hz, m.frequency_std_hz, 1, 3), pm(m.damping_ratio, m.damping_ratio_std, 100, 3),
-          fmt(m.mpc, 3)];
+          fmt(m.mpc, 3), fmt(m.mpd_deg, 1), fmt(m.mcf, 3)];
       }));
       (tm.dropped || []).forEach(function (d) {
         tms.appendChild(el('p', { 'class': 'note', text: 'Pole at ' + fmt(d.frequency_hz, 2) + ' Hz dropped: ' + d.reason }));

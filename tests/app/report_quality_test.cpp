@@ -64,6 +64,10 @@ TEST(ReportQuality, DataCarriesTheChecksAndTheIndicators) {
   EXPECT_DOUBLE_EQ(map["z"][3][4].get<double>(), 0.2);
   EXPECT_DOUBLE_EQ(map["z"][3][5].get<double>(), 0.98);
   EXPECT_DOUBLE_EQ(q["modes"][0]["mcf"].get<double>(), 0.001);
+  // The test-modes table carries MPD and MCF beside MPC, as ema fit wrote them.
+  const json& tm = data["setups"][0]["test_mode_table"]["modes"][0];
+  EXPECT_DOUBLE_EQ(tm["mpd_deg"].get<double>(), 1.2);
+  EXPECT_DOUBLE_EQ(tm["mcf"].get<double>(), 0.001);
   const json& mi = data["setups"][0]["mode_indicators"];
   ASSERT_EQ(mi["cmif"].size(), 2u);
   EXPECT_EQ(mi["cmif"][0].size(), mi["frequency_hz"].size());
