@@ -10,6 +10,7 @@
 #include "cli.hpp"
 #include "ema/core/error.hpp"
 #include "ema/correlation/diagnose.hpp"
+#include "ema/diagnose/diagnose.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/model_file.hpp"
@@ -38,28 +39,34 @@ json EffectJson(const model::Effect& e) {
   return out;
 }
 
-json CandidateJson(const correlation::Candidate& c) {
+json CandidateJson(const diagnose::Candidate& c) {
   json out = {{"rank", c.rank},
               {"kind", c.kind},
               {"target", c.target},
               {"parameters", json::object()},
               {"uncertainty", json::object()},
+              {"prior_sigma", json::object()},
+              {"probability", Number(c.probability)},
               {"mean_abs_frequency_error_pct", Number(c.mean_abs_frequency_error_pct)},
               {"mean_mac", Number(c.mean_mac)},
+              {"mean_agreement_pct", Number(c.mean_agreement_pct)},
               {"score", Number(c.score)},
+              {"log_evidence", Number(c.log_evidence)},
+              {"log_prior", Number(c.log_prior)},
               {"cost", Number(c.cost)},
               {"explained_pct", Number(c.explained_pct)},
               {"paired_modes", c.paired_modes},
               {"plausible", c.plausible},
               {"tied_with", c.tied_with},
-              {"description", correlation::DescribeCandidate(c)},
+              {"description", diagnose::DescribeCandidate(c)},
               {"effects", json::array()}};
-  const bool pair = c.effects.size() > 1;
-  for (const auto& p : c.parameters) {
-    const std::string key = pair ? p.effect_kind + "." + p.name : p.name;
-    out["parameters"][key] = p.value;
-    out["uncertainty"][key] = Number(p.sigma);
-    if (p.at_bound) out["at_bound"].push_back(key);
+  const std::vector<std::string> keys = diagnose::ParameterKeys(c);
+  for (size_t i = 0; i < c.parameters.size(); ++i) {
+    const auto& p = c.parameters[i];
+    out["parameters"][keys[i]] = p.value;
+    out["uncertainty"][keys[i]] = Number(p.sigma);
+    out["prior_sigma"][keys[i]] = Number(p.prior_sigma);
+    if (p.at_bound) out["at_bound"].push_back(keys[i]);
   }
   for (const auto& e : c.effects) out["effects"].push_back(EffectJson(e));
   if (!c.error.empty()) out["error"] = c.error;
@@ -74,7 +81,7 @@ std::string Fixed(double v, int digits) {
 }
 
 // Before/after table: every test mode of every setup, the baseline and rank-1 partners.
-std::string ModeTable(const correlation::Candidate& before, const correlation::Candidate& after, json* rows) {
+std::string ModeTable(const diagnose::Candidate& before, const diagnose::Candidate& after, json* rows) {
   std::ostringstream out;
   out << "| setup | test mode | test f [Hz] | model f before [Hz] | agreement before [%] | MAC before | "
          "model f after [Hz] | agreement after [%] | MAC after |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -98,6 +105,25 @@ std::string ModeTable(const correlation::Candidate& before, const correlation::C
   return out.str();
 }
 
+// One line for the user: what, where (members named), how sure.
+std::string DiagnosisSummary(const diagnose::Diagnosis& d) {
+  const diagnose::Candidate& first = d.candidates.front();
+  char p[32];
+  std::snprintf(p, sizeof p, "%.1f %%", 100.0 * first.probability);
+  if (first.effects.empty()) return std::string("Diagnosis: no missing effect (probability ") + p + ").";
+  std::vector<std::string> parts;
+  for (const auto& e : first.effects) {
+    const auto slash = e.target.find('/');
+    std::string where = slash == std::string::npos
+                            ? e.target
+                            : "member " + e.target.substr(slash + 1) + " of " + e.target.substr(0, slash);
+    parts.push_back(e.kind + " on " + where);
+  }
+  std::string out = "Diagnosis: ";
+  for (size_t i = 0; i < parts.size(); ++i) out += (i ? " + " : "") + parts[i];
+  return out + " (probability " + p + ").";
+}
+
 }  // namespace
 
 int RunDiagnose(const std::vector<std::string>& args) {
@@ -106,19 +132,28 @@ int RunDiagnose(const std::vector<std::string>& args) {
       "ema diagnose MODEL.toml --test [SETUP=]MODES.unv [--test SETUP2=MODES2.unv ...] [--json DIAG.json] "
       "[-o UPDATED.toml]";
   po::options_description options("options");
-  std::string model_path, json_path, out_path, criterion = "bic";
+  std::string model_path, json_path, out_path, criterion = "evidence";
   std::vector<std::string> tests, force_levels;
-  bool no_pairs = false;
-  correlation::DiagnoseOptions dopt;
+  bool no_pairs = false, no_members = false;
+  double shape_weight = 0.0;
+  diagnose::DiagnoseOptions dopt;
   options.add_options()("model", po::value(&model_path)->required(), "model file (.toml)")(
       "test", po::value(&tests)->required()->composing(),
       "test modes (UFF 55) of one setup, as SETUP=MODES.unv (or MODES.unv for the nominal model); repeat per setup")(
       "json", po::value(&json_path), "write the ranking as JSON (DIAG.json)")(
-      "output,o", po::value(&out_path), "write the model with the rank-1 effect(s) added as [[effect]] blocks")(
-      "criterion", po::value(&criterion)->default_value("bic"), "information criterion: bic or aicc")(
-      "shape-weight", po::value(&dopt.shape_weight)->default_value(0.1), "weight of (1 - MAC) against relative Δf")(
+      "output,o", po::value(&out_path),
+      "write the model with the rank-1 effect(s) added as [[effect]] blocks; relative paths in it are rewritten so "
+      "that it loads from its own folder")(
+      "criterion", po::value(&criterion)->default_value("evidence"),
+      "ranking: evidence (Laplace approximation with the priors), bic or aicc (no priors)")(
+      "max-effects", po::value(&dopt.max_effects)->default_value(3), "largest number of effects combined (1..3)")(
+      "no-pairs", po::bool_switch(&no_pairs), "single effects only (same as --max-effects 1)")(
+      "no-members", po::bool_switch(&no_members), "only whole groups, all points and bodies (no members or single points)")(
+      "frequency-floor", po::value(&dopt.frequency_floor)->default_value(dopt.frequency_floor),
+      "relative 1σ floor of a test frequency; a mode's σ is max(its stabilisation spread, floor × f)")(
+      "shape-sigma", po::value(&dopt.shape_sigma)->default_value(dopt.shape_sigma), "1σ of (1 - MAC)")(
+      "shape-weight", po::value(&shape_weight), "old form of --shape-sigma: shape σ = 0.001 / weight")(
       "mac-min", po::value(&dopt.pairing.mac_min)->default_value(0.5), "minimum MAC of a pair while fitting")(
-      "no-pairs", po::bool_switch(&no_pairs), "do not try pairs of effects")(
       "force-level", po::value(&force_levels)->composing(),
       "modes fitted at one impact force level, as FORCE_N=MODES.unv; two or more flag amplitude-dependent "
       "stiffness");
@@ -126,19 +161,25 @@ int RunDiagnose(const std::vector<std::string>& args) {
   po::positional_options_description positional;
   positional.add("model", 1);
   po::variables_map vm;
-  if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
-  if (criterion == "bic") {
-    dopt.criterion = correlation::InformationCriterion::kBic;
-  } else if (criterion == "aicc") {
-    dopt.criterion = correlation::InformationCriterion::kAicc;
-  } else {
-    throw UsageError("--criterion must be bic or aicc, got '" + criterion + "'");
+  if (!cli::Parse(args, usage, options, positional, &vm)) {
+    std::cout << "Default priors (relative 1σ per effect kind; a body's or spring's `uncertainty` and the model's\n"
+                 "[priors] table override them; docs/diagnose.md):\n"
+              << diagnose::PriorDefaultsText();
+    return 0;
   }
-  if (no_pairs) dopt.pair_pool = 0;
+  if (!diagnose::StringToCriterion(criterion, &dopt.criterion))
+    throw UsageError("--criterion must be evidence, bic or aicc, got '" + criterion + "'");
+  if (no_pairs) dopt.max_effects = 1;
+  if (no_members) dopt.members = false;
+  if (vm.count("shape-weight")) {
+    if (!(shape_weight > 0.0)) throw UsageError("--shape-weight must be > 0");
+    dopt.shape_sigma = 1e-3 / shape_weight;
+  }
+  if (std::string bad; !dopt.IsValid(&bad)) throw UsageError(bad);
   if (force_levels.size() == 1) throw UsageError("--force-level needs at least two levels");
 
   const model::Model model = formats::ReadModelFile(model_path);
-  std::vector<correlation::SetupModes> sets;
+  std::vector<diagnose::SetupModes> sets;
   for (const std::string& t : tests) {
     auto [setup, path] = SplitSetup(t);
     ModeSet modes = formats::ReadModeSet(path);
@@ -146,41 +187,64 @@ int RunDiagnose(const std::vector<std::string>& args) {
     sets.push_back({setup, std::move(modes)});
   }
   dopt.progress = [](double f, std::string_view stage) { cli::DrawProgress(f, std::string(stage)); };
-  const correlation::Diagnosis d = correlation::Diagnose(model, sets, dopt);
+  const diagnose::Diagnosis d = diagnose::Diagnose(model, sets, dopt);
 
   json out;
   out["baseline"] = {{"mean_abs_frequency_error_pct", Number(d.baseline.mean_abs_frequency_error_pct)},
                      {"mean_mac", Number(d.baseline.mean_mac)},
+                     {"mean_agreement_pct", Number(d.baseline.mean_agreement_pct)},
                      {"score", Number(d.baseline.score)},
                      {"cost", Number(d.baseline.cost)},
                      {"paired_modes", d.baseline.paired_modes}};
   out["candidates"] = json::array();
   for (const auto& c : d.candidates) out["candidates"].push_back(CandidateJson(c));
-  out["criterion"] = criterion;
+  out["criterion"] = diagnose::CriterionToString(dopt.criterion);
+  out["options"] = {{"frequency_floor", dopt.frequency_floor}, {"shape_sigma", dopt.shape_sigma},
+                    {"max_effects", dopt.max_effects}, {"members", dopt.members},
+                    {"mac_min", dopt.pairing.mac_min}};  // the effective options, for reproducibility
   out["residual_count"] = d.residual_count;
   out["test_modes"] = d.test_mode_count;
   out["model_solves"] = d.model_solves;
+  out["candidates_screened"] = d.candidates_screened;
   out["explanation"] = d.explanation;
+  out["steps"] = json::array();
+  for (const auto& st : d.steps)
+    out["steps"].push_back({{"added", st.added},
+                            {"mean_abs_frequency_error_pct", Number(st.mean_abs_frequency_error_pct)},
+                            {"mean_mac", Number(st.mean_mac)},
+                            {"mean_agreement_pct", Number(st.mean_agreement_pct)}});
   json mode_rows = json::array();
-  const correlation::Candidate& first = d.candidates.front();
+  const diagnose::Candidate& first = d.candidates.front();
 
-  std::cout << d.explanation << "\n\n| rank | candidate | parameters | mean |Δf| [%] | mean MAC | score |\n"
-            << "|---:|---|---|---:|---:|---:|\n";
+  std::cout << DiagnosisSummary(d) << "\n\n" << d.explanation
+            << "\n\n| rank | candidate | parameters | probability | mean |Δf| [%] | mean MAC | score |\n"
+            << "|---:|---|---|---:|---:|---:|---:|\n";
+  int shown = 0;
   for (const auto& c : d.candidates) {
+    if (++shown > 15) {
+      std::cout << "| … | " << d.candidates.size() - 15 << " more in DIAG.json | | | | | |\n";
+      break;
+    }
     std::string params;
     for (const auto& p : c.parameters) {
-      char buffer[96];
+      char buffer[128];
       std::snprintf(buffer, sizeof buffer, "%s%s=%.4g±%.2g", params.empty() ? "" : ", ", p.name.c_str(), p.value,
                     p.sigma);
       params += buffer;
       if (p.at_bound) params += " (at bound)";
     }
     std::cout << "| " << c.rank << " | " << c.kind << (c.target.empty() ? "" : " of " + c.target) << " | "
-              << (c.error.empty() ? params : "failed: " + c.error) << " | "
-              << Fixed(c.mean_abs_frequency_error_pct, 2) << " | " << Fixed(c.mean_mac, 3) << " | "
+              << (c.error.empty() ? params : "failed: " + c.error) << " | " << Fixed(100.0 * c.probability, 1)
+              << " % | " << Fixed(c.mean_abs_frequency_error_pct, 2) << " | " << Fixed(c.mean_mac, 3) << " | "
               << Fixed(c.score, 1) << " |\n";
   }
-  std::cout << "\nBefore/after (" << (first.kind == "none" ? "no effect" : correlation::DescribeCandidate(first))
+  if (d.steps.size() > 2) {
+    std::cout << "\nThe error as each effect is added:\n";
+    for (const auto& st : d.steps)
+      std::cout << "  " << (st.added.empty() ? std::string("model as given") : "+ " + st.added) << ": mean |Δf| "
+                << Fixed(st.mean_abs_frequency_error_pct, 2) << " %, mean MAC " << Fixed(st.mean_mac, 3) << "\n";
+  }
+  std::cout << "\nBefore/after (" << (first.kind == "none" ? "no effect" : diagnose::DescribeCandidate(first))
             << "):\n\n"
             << ModeTable(d.baseline, first, &mode_rows);
   out["modes"] = mode_rows;
@@ -219,7 +283,7 @@ int RunDiagnose(const std::vector<std::string>& args) {
   if (!out_path.empty()) {
     if (first.effects.empty())
       std::cerr << "ema diagnose: rank 1 is 'none': " << out_path << " is the model without an added effect\n";
-    formats::WriteModelWithEffects(model_path, out_path, first.effects);
+    formats::WriteModelWithEffects(model_path, out_path, first.effects);  // relative paths rewritten
   }
   return 0;
 }

@@ -22,6 +22,7 @@
 #include "ema/formats/io.hpp"
 #include "project_file.hpp"
 #include "quality_json.hpp"
+#include "run_history.hpp"
 #include "report.hpp"
 
 namespace ema {
@@ -297,6 +298,8 @@ int RunRun(const std::vector<std::string>& args) {
                 "nominal: agree / MAC", "updated: agree / MAC");
   summary.push_back(line);
   report::ReportInput input;
+  double agree_before = 0.0, mac_before = 0.0, agree_after = 0.0, mac_after = 0.0;
+  int n_before = 0, n_after = 0;
   for (const app::ProjectTest& test : project.tests) {
     const TestFiles f(out / test.name);
     report::SetupResults s;
@@ -339,6 +342,16 @@ int RunRun(const std::vector<std::string>& args) {
     std::snprintf(line, sizeof line, "  %-12s %5d %8d %6d  %-22s %-22s", test.name.c_str(), frf_count, rejected, modes,
                   before.c_str(), after.c_str());
     summary.push_back(line);
+    if (const double a = Get(s.correlation_before, {"summary", "mean_agreement_pct"}); std::isfinite(a)) {
+      agree_before += a;
+      mac_before += Get(s.correlation_before, {"summary", "mean_mac"});
+      ++n_before;
+    }
+    if (const double a = Get(s.correlation_after, {"summary", "mean_agreement_pct"}); std::isfinite(a)) {
+      agree_after += a;
+      mac_after += Get(s.correlation_after, {"summary", "mean_mac"});
+      ++n_after;
+    }
     input.setups.push_back(std::move(s));
   }
   if (diagnosis.contains("candidates") && diagnosis["candidates"].is_array() && !diagnosis["candidates"].empty()) {
@@ -353,9 +366,28 @@ int RunRun(const std::vector<std::string>& args) {
       const std::string params = ParametersText(c.value("parameters", json()));
       if (!params.empty()) text += " (" + params + ")";
       text += ": mean |f error| " + Fixed(base, 2) + " % -> " + Fixed(Get(c, {"mean_abs_frequency_error_pct"}), 2) + " %";
+      if (const double p = Get(c, {"probability"}); std::isfinite(p)) text += ", probability " + Fixed(100.0 * p, 1) + " %";
       summary.push_back(text);
       ++shown;
     }
+  }
+  // The model's story over runs into this folder (history.json) and where rank 1 acts.
+  app::RunRecord record;
+  record.stamp = Stamp();
+  record.model = project.model;
+  record.agreement_before = n_before ? agree_before / n_before : std::nan("");
+  record.mac_before = n_before ? mac_before / n_before : std::nan("");
+  record.agreement_after = n_after ? agree_after / n_after : std::nan("");
+  record.mac_after = n_after ? mac_after / n_after : std::nan("");
+  record.diagnosis = diagnosis;
+  input.history = app::AppendRunHistory(out, record);
+  input.diagnosed_places = app::DiagnosedPlaces(project.model, diagnosis);
+  if (input.history.size() > 1) {
+    const json& prev = input.history[input.history.size() - 2];
+    if (prev.contains("mean_agreement_pct_before") && prev["mean_agreement_pct_before"].is_number())
+      summary.push_back("  history: model version " + std::to_string(input.history.size()) + ", mean agreement " +
+                        Fixed(prev["mean_agreement_pct_before"].get<double>(), 1) + " % (version " +
+                        std::to_string(input.history.size() - 1) + ") -> " + Fixed(record.agreement_before, 1) + " %");
   }
   const fs::path report_path = out / "report.html";
   if (!vm.count("no-report")) summary.push_back("  report: " + report_path.string());

@@ -233,6 +233,8 @@ json BuildReportData(const ReportInput& input) {
   data["problems"] = input.problems;
   data["diagnosis"] = input.diagnosis.is_null() ? json::object() : input.diagnosis;
   if (!input.amplitude.is_null()) data["amplitude"] = input.amplitude;
+  data["diagnosed_places"] = input.diagnosed_places.is_null() ? json::array() : input.diagnosed_places;
+  data["history"] = input.history.is_null() ? json::array() : input.history;
   json setups = json::array();
   for (const SetupResults& setup : input.setups) {
     const ShapeTable test = ReadShapeTable(setup.test_modes);

@@ -45,6 +45,10 @@ struct ReportInput {
   /// `ema amplitude --json` (cli.md) when the test was run at several force levels: the report
   /// then plots frequency and damping against level per mode. Null: no such section.
   nlohmann::json amplitude;
+  /// Where rank 1's effects act (app::DiagnosedPlaces): drawn over the test geometry.
+  nlohmann::json diagnosed_places;
+  /// OUTDIR/history.json (app::AppendRunHistory): the model versions of successive runs.
+  nlohmann::json history;
   std::vector<std::string> problems;   ///< steps that failed or were skipped, shown in the page
 };
 

@@ -396,8 +396,8 @@
 
   // ---- diagnosis ----
   var dg = section(main, 'Which physical effect is missing?',
-    'Every effect of the vocabulary fitted to all tests at once and ranked by an information criterion ' +
-    '(rank 1 = most likely missing effect).');
+    'Every effect of the vocabulary, on every group, member, point and body, and combinations of up to three, ' +
+    'fitted to all tests at once and ranked by posterior probability (rank 1 = most likely missing effects).');
   var diag = data.diagnosis || {};
   if (diag.candidates && diag.candidates.length) {
     var cands = diag.candidates.slice().sort(function (a, b) { return a.rank - b.rank; });
@@ -448,11 +448,12 @@
     var best = cands[0];
     var params = best.parameters ? JSON.stringify(best.parameters) : '';
     dg.appendChild(el('p', { 'class': 'verdict', text: 'Rank 1: ' + best.kind + (best.target ? ' on "' + best.target + '"' : '') +
-      ' ' + params + ' — mean |frequency error| ' + fmt(baseErr, 2) + ' % → ' + fmt(best.mean_abs_frequency_error_pct, 2) +
+      ' ' + params + (best.probability !== undefined && best.probability !== null ? ' (probability ' + fmt(100 * best.probability, 1) + ' %)' : '') + ' — mean |frequency error| ' + fmt(baseErr, 2) + ' % → ' + fmt(best.mean_abs_frequency_error_pct, 2) +
       ' %, mean MAC ' + fmt(best.mean_mac, 3) + '.' }));
     if (diag.explanation) dg.appendChild(el('p', { text: String(diag.explanation) }));
-    table(dg, ['rank', 'kind', 'target', 'parameters', 'mean |f error| %', 'mean MAC', 'score'], cands.map(function (c) {
+    table(dg, ['rank', 'kind', 'target', 'parameters', 'probability', 'mean |f error| %', 'mean MAC', 'score'], cands.map(function (c) {
       return [c.rank, c.kind, c.target || '', c.parameters ? JSON.stringify(c.parameters) : '',
+        c.probability === undefined || c.probability === null ? '' : fmt(100 * c.probability, 1) + ' %',
         fmt(c.mean_abs_frequency_error_pct, 2), fmt(c.mean_mac, 3), fmt(c.score, 2)];
     }), 'small');
   } else {
@@ -460,6 +461,72 @@
   }
 
   drawAmplitude(data.amplitude);
+  // ---- the diagnosis' story: where it acts, the error falling effect by effect and over versions ----
+  // (issue 13; kept in this block so other report sections stay untouched)
+  (function drawDiagnosisStory() {
+    var story = section(main, 'Where, effect by effect, version by version',
+      'Rank 1\'s members and points on the test geometry; the error as each of its effects is added; ' +
+      'the model\'s agreement over the runs into this output folder (history.json).');
+    var places = data.diagnosed_places || [];
+    var geo = null;
+    (data.setups || []).forEach(function (s) { if (!geo && s.shapes && s.shapes.nodes && s.shapes.nodes.length) geo = s.shapes; });
+    var placed = places.filter(function (p) { return p.points && p.points.length; });
+    if (placed.length) {
+      var traces = [];
+      if (geo) {
+        traces.push({ type: 'scatter3d', mode: 'markers', name: 'test points', x: geo.nodes.map(function (n) { return n.x; }),
+          y: geo.nodes.map(function (n) { return n.y; }), z: geo.nodes.map(function (n) { return n.z; }),
+          text: geo.nodes.map(function (n) { return 'node ' + n.id; }), hoverinfo: 'text', marker: { size: 3, color: '#777' } });
+        var lx = [], ly = [], lz = [];
+        (geo.lines || []).forEach(function (l) {
+          var a = geo.nodes[l[0]], b = geo.nodes[l[1]];
+          lx.push(a.x, b.x, null); ly.push(a.y, b.y, null); lz.push(a.z, b.z, null);
+        });
+        if (lx.length) traces.push({ type: 'scatter3d', mode: 'lines', name: 'wireframe', x: lx, y: ly, z: lz,
+          hoverinfo: 'skip', line: { color: '#bbb' } });
+      }
+      var colours = ['#b2182b', '#2166ac', '#1b7837'];
+      placed.forEach(function (p, i) {
+        traces.push({ type: 'scatter3d', mode: 'markers+text', name: p.kind + ' on ' + p.target,
+          x: p.points.map(function (q) { return q[0]; }), y: p.points.map(function (q) { return q[1]; }),
+          z: p.points.map(function (q) { return q[2]; }), text: p.points.map(function () { return p.label; }),
+          textposition: 'top center', marker: { size: 7, symbol: 'diamond', color: colours[i % colours.length] } });
+      });
+      story.appendChild(el('h3', { text: 'Diagnosed: ' + placed.map(function (p) { return p.target; }).join(' + ') }));
+      chart(story, traces, { height: 420, margin: { l: 0, r: 0, t: 10, b: 0 }, scene: { aspectmode: 'data' } }, 'half');
+    } else {
+      story.appendChild(el('p', { text: 'Rank 1 is "none" or acts on no located place: nothing to highlight.' }));
+    }
+    var steps = (data.diagnosis || {}).steps || [];
+    if (steps.length > 1) {
+      var sx = steps.map(function (st, i) { return i === 0 ? 'model as given' : '+ ' + st.added; });
+      chart(story, [{ type: 'scatter', mode: 'lines+markers', name: 'mean |frequency error| (%)', x: sx,
+        y: steps.map(function (st) { return st.mean_abs_frequency_error_pct; }) },
+      { type: 'scatter', mode: 'lines+markers', name: '1 − mean MAC', x: sx, yaxis: 'y2',
+        y: steps.map(function (st) { return 1 - st.mean_mac; }) }],
+      { height: 320, yaxis: { title: { text: 'mean |frequency error| (%)' }, type: 'log' },
+        yaxis2: { title: { text: '1 − mean MAC' }, overlaying: 'y', side: 'right', type: 'log' },
+        legend: { orientation: 'h' } }, 'half');
+    }
+    var history = data.history || [];
+    if (history.length) {
+      var hx = history.map(function (h) { return 'v' + h.version + ' ' + String(h.hash || '').slice(0, 8); });
+      var err = function (key) { return history.map(function (h) { return h[key] === null || h[key] === undefined ? null : 100 - h[key]; }); };
+      chart(story, [{ type: 'scatter', mode: 'lines+markers', name: 'model as run (100 − mean agreement, %)', x: hx,
+        y: err('mean_agreement_pct_before'),
+        text: history.map(function (h) { return (h.effects || []).join('; ') || 'no [[effect]] blocks'; }) },
+      { type: 'scatter', mode: 'lines+markers', name: 'with the diagnosed effect(s)', x: hx, y: err('mean_agreement_pct_after'),
+        text: history.map(function (h) { return h.diagnosis ? h.diagnosis.kind + ' on ' + h.diagnosis.target : ''; }) }],
+      { height: 320, yaxis: { title: { text: '100 − mean agreement (%)' }, type: 'log' }, xaxis: { title: { text: 'model version' } },
+        legend: { orientation: 'h' } }, 'half');
+      table(story, ['version', 'when', 'hash', 'effects in the model', 'mean agreement', 'diagnosed next'],
+        history.map(function (h) {
+          return [h.version, h.stamp || '', String(h.hash || '').slice(0, 12), (h.effects || []).join('; '),
+            fmt(h.mean_agreement_pct_before, 2) + ' %',
+            h.diagnosis ? h.diagnosis.kind + ' on ' + h.diagnosis.target + ' (p ' + fmt(100 * (h.diagnosis.probability || 0), 1) + ' %)' : ''];
+        }), 'small');
+    }
+  })();
 
   if (data.files && data.files.length) {
     var files = section(main, 'Files written by this run');

@@ -1,6 +1,7 @@
 // The model file (model-format.md) read with toml++; every error names file:line and the key.
 #include "ema/formats/model_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include "ema/formats/toml_fields.hpp"
 #include "ema/formats/uff.hpp"
 #include "ema/model/air_film.hpp"
+#include "ema/model/effects.hpp"
 
 namespace ema::formats {
 namespace {
@@ -84,6 +86,13 @@ class Reader : public TomlFields {
     const toml::table* t = n.as_table();
     if (!t) throw InputError(At(n), "key '" + key + "': expected a table");
     return *t;
+  }
+  /// A relative 1σ (model-format.md "Prior knowledge"): a number > 0.
+  double Uncertainty(const toml::node& n, const std::string& context) const {
+    const double v = Number(n, "uncertainty");
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw InputError(At(n), context + ": uncertainty must be a relative 1σ > 0 (0.02 = 2 %), found " + std::to_string(v));
+    return v;
   }
   fs::path Resolve(const std::string& p) const {
     fs::path f(p);
@@ -316,7 +325,13 @@ class Reader : public TomlFields {
     }
     model::Model m;
     m.origin = file_;
-    CheckKeys(root, {"model", "body", "mass", "spring", "damping", "point", "fe", "setup", "effect"}, "the model file");
+    CheckKeys(root, {"model", "body", "mass", "spring", "damping", "point", "fe", "setup", "effect", "priors"},
+              "the model file");
+    if (const toml::node* n = root.get("priors")) {
+      const toml::table& t = Table(*n, "priors");
+      CheckKeys(t, std::set<std::string>(model::EffectKinds().begin(), model::EffectKinds().end()), "[priors]");
+      for (const auto& [k, v] : t) m.priors[std::string(k.str())] = Uncertainty(v, "[priors] " + std::string(k.str()));
+    }
     if (const toml::node* n = root.get("model")) {
       const toml::table& t = Table(*n, "model");
       CheckKeys(t, {"name", "description"}, "[model]");
@@ -331,7 +346,7 @@ class Reader : public TomlFields {
     };
     std::set<std::string> names;
     each("body", [&](const toml::table& t) {
-      CheckKeys(t, {"name", "mass", "inertia", "products", "centre"}, "[[body]]");
+      CheckKeys(t, {"name", "mass", "inertia", "products", "centre", "uncertainty"}, "[[body]]");
       model::Body b;
       b.line = Line(t);
       b.name = String(Require(t, "name", "[[body]]"), "name");
@@ -342,6 +357,7 @@ class Reader : public TomlFields {
       b.inertia = Vector3(Require(t, "inertia", "[[body]] " + b.name), "inertia");
       if (const toml::node* p = t.get("products")) b.products = Vector3(*p, "products");
       if (const toml::node* c = t.get("centre")) b.centre = Vector3(*c, "centre");
+      if (const toml::node* u = t.get("uncertainty")) b.uncertainty = Uncertainty(*u, "body '" + b.name + "'");
       m.bodies.push_back(b);
     });
     auto check_body = [&](const model::Anchor& a, const toml::table& t, const std::string& what) {
@@ -363,12 +379,18 @@ class Reader : public TomlFields {
       m.masses.push_back(pm);
     });
     each("spring", [&](const toml::table& t) {
-      CheckKeys(t, {"name", "group", "kind", "a", "b", "direction", "law"}, "[[spring]]");
+      CheckKeys(t, {"name", "group", "member", "kind", "a", "b", "direction", "law", "uncertainty"}, "[[spring]]");
       model::Spring s;
       s.line = Line(t);
       s.name = String(Require(t, "name", "[[spring]]"), "name");
       const std::string ctx = "spring '" + s.name + "'";
       s.group = t.get("group") ? String(*t.get("group"), "group") : s.name;
+      if (const toml::node* mem = t.get("member")) {
+        s.member = String(*mem, "member");
+        if (s.member.empty() || s.member.find('/') != std::string::npos)
+          throw InputError(At(*mem), ctx + ": member must be a non-empty name without '/'");
+      }
+      if (const toml::node* u = t.get("uncertainty")) s.uncertainty = Uncertainty(*u, ctx);
       if (const toml::node* k = t.get("kind")) {
         const std::string kind = String(*k, "kind");
         if (kind == "rotational") s.kind = model::Spring::Kind::kRotational;
@@ -508,13 +530,91 @@ std::string EffectToToml(const model::Effect& e) {
   return s;
 }
 
+namespace {
+
+// The string literal starting at (line, column) of `text` (1-based, as toml++ reports a value's
+// source): [first, last) byte offsets including the quotes; npos when none is found.
+std::pair<size_t, size_t> LiteralAt(const std::string& text, size_t line, size_t column) {
+  size_t pos = 0;
+  for (size_t l = 1; l < line && pos != std::string::npos; ++l) {
+    pos = text.find('\n', pos);
+    if (pos != std::string::npos) ++pos;
+  }
+  if (pos == std::string::npos) return {std::string::npos, 0};
+  size_t i = pos + (column > 0 ? column - 1 : 0);
+  while (i < text.size() && text[i] != '"' && text[i] != '\'' && text[i] != '\n') ++i;
+  if (i >= text.size() || text[i] == '\n') return {std::string::npos, 0};
+  const char quote = text[i];
+  if (text.compare(i, 3, std::string(3, quote)) == 0) return {std::string::npos, 0};  // multi-line: left alone
+  for (size_t j = i + 1; j < text.size() && text[j] != '\n'; ++j) {
+    if (quote == '"' && text[j] == '\\') {
+      ++j;
+      continue;
+    }
+    if (text[j] == quote) return {i, j + 1};
+  }
+  return {std::string::npos, 0};
+}
+
+// Every path-valued string of a model file: `file =` of laws (anywhere) and [fe] files.
+void CollectPaths(const toml::node& node, bool fe, std::vector<const toml::node*>* out) {
+  if (const toml::table* t = node.as_table()) {
+    for (const auto& [k, v] : *t) {
+      const std::string key(k.str());
+      const bool path_key = key == "file" || (fe && (key == "mass" || key == "stiffness" || key == "dofs" || key == "nodes"));
+      if (path_key && v.is_string()) out->push_back(&v);
+      else CollectPaths(v, false, out);
+    }
+  } else if (const toml::array* a = node.as_array()) {
+    for (const toml::node& e : *a) CollectPaths(e, false, out);
+  }
+}
+
+std::string RewriteRelativePaths(const std::string& text, const fs::path& in_model, const fs::path& out) {
+  toml::table root;
+  try {
+    root = toml::parse(text, in_model.string());
+  } catch (const toml::parse_error& e) {
+    throw InputError(in_model.string() + ":" + std::to_string(e.source().begin.line), std::string(e.description()));
+  }
+  std::vector<const toml::node*> nodes;
+  for (const auto& [k, v] : root) CollectPaths(v, std::string(k.str()) == "fe", &nodes);
+  const fs::path in_dir = fs::absolute(in_model).parent_path();
+  const fs::path out_dir = fs::weakly_canonical(fs::absolute(out).parent_path());
+  struct Edit {
+    size_t first, last;
+    std::string replacement;
+  };
+  std::vector<Edit> edits;
+  for (const toml::node* n : nodes) {
+    const fs::path p(*n->value<std::string>());
+    if (p.empty() || p.is_absolute()) continue;
+    const fs::path target = fs::weakly_canonical(in_dir / p);
+    fs::path rel = target.lexically_relative(out_dir);
+    const std::string now = (rel.empty() ? target : rel).generic_string();
+    if (now == p.generic_string()) continue;
+    const auto [first, last] = LiteralAt(text, n->source().begin.line, n->source().begin.column);
+    if (first == std::string::npos) continue;
+    std::string quoted = "\"";
+    for (char c : now) quoted += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
+    edits.push_back({first, last, quoted + "\""});
+  }
+  std::sort(edits.begin(), edits.end(), [](const Edit& a, const Edit& b) { return a.first > b.first; });
+  std::string s = text;
+  for (const Edit& e : edits) s.replace(e.first, e.last - e.first, e.replacement);
+  return s;
+}
+
+}  // namespace
+
 void WriteModelWithEffects(const std::filesystem::path& in_model, const std::filesystem::path& out,
                            const std::vector<model::Effect>& effects) {
   std::ifstream in(in_model, std::ios::binary);
   if (!in) throw InputError(in_model.string(), "cannot open model file");
   std::ostringstream text;
   text << in.rdbuf();
-  std::string s = text.str();
+  // Relative curve, [fe] and node-list paths are rewritten to stay valid from the output's folder.
+  std::string s = RewriteRelativePaths(text.str(), in_model, out);
   if (!s.empty() && s.back() != '\n') s += '\n';
   for (const model::Effect& e : effects) {
     s += '\n';

@@ -1,7 +1,10 @@
 // The effects of the vocabulary (model-format.md "Effects") as transformations of a Model.
 #include "ema/model/effects.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 #include <set>
 #include <sstream>
 
@@ -27,14 +30,20 @@ double Param(const Model& model, const Effect& e, const std::string& key, bool p
 
 std::vector<Spring*> GroupSprings(Model& model, const Effect& e) {
   std::vector<Spring*> out;
-  std::set<std::string> groups;
-  for (Spring& s : model.springs) {
-    groups.insert(s.group);
-    if (s.group == e.target) out.push_back(&s);
-  }
+  for (int i : TargetSprings(model, e.target)) out.push_back(&model.springs[i]);
   if (out.empty()) {
+    std::set<std::string> groups;
+    for (const Spring& s : model.springs) groups.insert(s.group);
     std::string known;
     for (const auto& g : groups) known += (known.empty() ? "" : ", ") + g;
+    const auto slash = e.target.find('/');
+    if (slash != std::string::npos && groups.count(e.target.substr(0, slash))) {
+      std::string members;
+      for (const Member& m : Members(model))
+        if (m.group == e.target.substr(0, slash)) members += (members.empty() ? "" : ", ") + m.name;
+      throw InputError(Where(model, e), "no member '" + e.target.substr(slash + 1) + "' in group '" +
+                                            e.target.substr(0, slash) + "' (members: " + members + ")");
+    }
     throw InputError(Where(model, e), "no spring group '" + e.target + "' (groups: " + (known.empty() ? "none" : known) + ")");
   }
   return out;
@@ -77,97 +86,151 @@ bool SetOperatingValue(Law& law, double value) {
   return false;
 }
 
+void ApplySeriesCompliance(Model& model, const Effect& e) {
+  std::optional<Law> law = e.law;
+  if (!law && e.parameters.count("k")) law = Law(LinearLaw{Param(model, e, "k", true)});
+  if (!law) throw InputError(Where(model, e), "missing 'law' (e.g. law = { linear = { k = 6.5e6 } })");
+  for (Spring* s : GroupSprings(model, e)) {
+    if (auto* chain = std::get_if<SeriesLaw>(&s->law.value)) {
+      chain->elements.push_back(*law);  // the chain re-solves its equilibrium with the new element
+    } else {
+      SeriesLaw series;
+      series.elements = {s->law, *law};
+      // A lone air film keeps its gap as the chain's setting; otherwise the chain keeps the
+      // element's own operating point.
+      if (const auto* film = std::get_if<AirFilmLaw>(&s->law.value)) series.setting = film->operating_gap;
+      s->law = Law(std::move(series));
+    }
+  }
+}
+
+void ApplyStiffnessScale(Model& model, const Effect& e) {
+  const double f = Param(model, e, "factor", true);
+  for (Spring* s : GroupSprings(model, e)) s->stiffness_factor *= f;
+}
+
+void ApplyOperatingPoint(Model& model, const Effect& e) {
+  auto it = e.parameters.find("value");
+  if (it == e.parameters.end() || !std::isfinite(it->second)) throw InputError(Where(model, e), "missing parameter 'value'");
+  bool any = false;
+  for (Spring* s : GroupSprings(model, e)) any |= SetOperatingValue(s->law, it->second);
+  if (!any) throw InputError(Where(model, e), "'" + e.target + "' has only linear laws; no operating point to change");
+}
+
+void ApplyAddedMass(Model& model, const Effect& e) {
+  const double m = Param(model, e, "mass", false);
+  std::vector<const TestPoint*> targets;
+  if (e.target == "all_points") {
+    for (const TestPoint& p : model.points) targets.push_back(&p);
+    if (targets.empty()) throw InputError(Where(model, e), "the model has no [[point]]");
+  } else if (e.target.rfind("points:", 0) == 0) {
+    std::stringstream list(e.target.substr(7));
+    std::string item;
+    while (std::getline(list, item, ',')) {
+      int id = 0;
+      try {
+        std::size_t used = 0;
+        id = std::stoi(item, &used);
+        if (item.find_first_not_of(" ", used) != std::string::npos) throw std::invalid_argument(item);
+      } catch (const std::exception&) {
+        throw InputError(Where(model, e), "bad point id '" + item + "' (expected points:101,102)");
+      }
+      const TestPoint* found = nullptr;
+      for (const TestPoint& p : model.points)
+        if (p.id == id) found = &p;
+      if (!found) throw InputError(Where(model, e), "no test point " + std::to_string(id));
+      targets.push_back(found);
+    }
+  } else {
+    throw InputError(Where(model, e), "target must be 'all_points' or 'points:101,102'");
+  }
+  std::vector<PointMass> added;
+  for (const TestPoint* p : targets) added.push_back({"added_mass@" + std::to_string(p->id), p->where, m, e.line});
+  model.masses.insert(model.masses.end(), added.begin(), added.end());
+}
+
+void ApplyMassScale(Model& model, const Effect& e) {
+  const double f = Param(model, e, "factor", true);
+  Body& b = TargetBody(model, e);
+  b.mass *= f;
+  b.inertia *= f;
+  b.products *= f;
+}
+
+void ApplyGroundSpring(Model& model, const Effect& e) {
+  const double k = Param(model, e, "k", false);
+  const Body& b = TargetBody(model, e);
+  static const char* kAxis[] = {"x", "y", "z"};
+  for (int i = 0; i < 3; ++i) {
+    Spring s;
+    s.name = "ground_spring:" + b.name + ":" + kAxis[i];
+    s.group = "ground_spring";
+    s.a.body = b.name;
+    s.b.body = kGround;
+    s.direction = Eigen::Vector3d::Unit(i);
+    s.law = LinearLaw{k};
+    s.line = e.line;
+    model.springs.push_back(std::move(s));
+  }
+}
+
 }  // namespace
 
+const std::vector<EffectKindInfo>& EffectKindTable() {
+  // Ranges: wide, so that a true effect never sits on a bound. Priors: docs/diagnose.md.
+  static const std::vector<EffectKindInfo> kTable = {
+      {EffectKind::kSeriesCompliance, "series_compliance", "k", EffectTarget::kSprings, true, 1e-3, 1e3, +1,
+       PriorShape::kLogNormal, 1.5, "1σ of ln(k / the target's mean stiffness)",
+       "a mount, joint or adhesive layer in series with the interface", ApplySeriesCompliance},
+      {EffectKind::kStiffnessScale, "stiffness_scale", "factor", EffectTarget::kSprings, true, 0.02, 50.0, 0,
+       PriorShape::kLogNormal, 0.5, "1σ of ln(factor); a spring's `uncertainty` overrides it",
+       "the interface stiffness itself is mis-estimated", ApplyStiffnessScale},
+      {EffectKind::kOperatingPoint, "operating_point", "value", EffectTarget::kSprings, true, 0.1, 10.0, 0,
+       PriorShape::kLogNormal, 0.5, "1σ of ln(value / nominal value)",
+       "the gap, preload or setting differs from the nominal one", ApplyOperatingPoint},
+      {EffectKind::kAddedMass, "added_mass", "mass", EffectTarget::kPoints, false, 1e-5, 1.0, -1,
+       PriorShape::kHalfNormal, 0.02, "1σ of the mass per point, as a share of the model's mass",
+       "sensor mass loading, cables, payload", ApplyAddedMass},
+      {EffectKind::kMassScale, "mass_scale", "factor", EffectTarget::kBody, false, 0.1, 10.0, 0,
+       PriorShape::kLogNormal, 0.05, "1σ of ln(factor); a body's `uncertainty` overrides it",
+       "body mass or inertia mis-estimated", ApplyMassScale},
+      {EffectKind::kGroundSpring, "ground_spring", "k", EffectTarget::kBody, false, 1e-5, 1e4, -1,
+       PriorShape::kLogNormal, 3.0, "1σ of ln(k / 0.1 x the mean spring stiffness)",
+       "the \"fixed\" support is flexible", ApplyGroundSpring},
+  };
+  return kTable;
+}
+
+const EffectKindInfo* FindEffectKind(const std::string& name) {
+  for (const EffectKindInfo& info : EffectKindTable())
+    if (name == info.name) return &info;
+  return nullptr;
+}
+
+const EffectKindInfo& Info(EffectKind kind) {
+  for (const EffectKindInfo& info : EffectKindTable())
+    if (info.kind == kind) return info;
+  throw std::logic_error("effect kind missing from EffectKindTable");
+}
+
 const std::vector<std::string>& EffectKinds() {
-  static const std::vector<std::string> kKinds = {"series_compliance", "stiffness_scale", "operating_point",
-                                                  "added_mass",        "mass_scale",      "ground_spring"};
+  static const std::vector<std::string> kKinds = [] {
+    std::vector<std::string> names;
+    for (const EffectKindInfo& info : EffectKindTable()) names.push_back(info.name);
+    return names;
+  }();
   return kKinds;
 }
 
 Model ApplyEffect(const Model& input, const Effect& e) {
-  Model model = input;
-  if (e.kind == "series_compliance") {
-    std::optional<Law> law = e.law;
-    if (!law && e.parameters.count("k")) law = Law(LinearLaw{Param(model, e, "k", true)});
-    if (!law) throw InputError(Where(model, e), "missing 'law' (e.g. law = { linear = { k = 6.5e6 } })");
-    for (Spring* s : GroupSprings(model, e)) {
-      if (auto* chain = std::get_if<SeriesLaw>(&s->law.value)) {
-        chain->elements.push_back(*law);  // the chain re-solves its equilibrium with the new element
-      } else {
-        SeriesLaw series;
-        series.elements = {s->law, *law};
-        // A lone air film keeps its gap as the chain's setting; otherwise the chain keeps the
-        // element's own operating point.
-        if (const auto* film = std::get_if<AirFilmLaw>(&s->law.value)) series.setting = film->operating_gap;
-        s->law = Law(std::move(series));
-      }
-    }
-  } else if (e.kind == "stiffness_scale") {
-    const double f = Param(model, e, "factor", true);
-    for (Spring* s : GroupSprings(model, e)) s->stiffness_factor *= f;
-  } else if (e.kind == "operating_point") {
-    auto it = e.parameters.find("value");
-    if (it == e.parameters.end() || !std::isfinite(it->second)) throw InputError(Where(model, e), "missing parameter 'value'");
-    bool any = false;
-    for (Spring* s : GroupSprings(model, e)) any |= SetOperatingValue(s->law, it->second);
-    if (!any) throw InputError(Where(model, e), "group '" + e.target + "' has only linear laws; no operating point to change");
-  } else if (e.kind == "added_mass") {
-    const double m = Param(model, e, "mass", false);
-    std::vector<const TestPoint*> targets;
-    if (e.target == "all_points") {
-      for (const TestPoint& p : model.points) targets.push_back(&p);
-      if (targets.empty()) throw InputError(Where(model, e), "the model has no [[point]]");
-    } else if (e.target.rfind("points:", 0) == 0) {
-      std::stringstream list(e.target.substr(7));
-      std::string item;
-      while (std::getline(list, item, ',')) {
-        int id = 0;
-        try {
-          std::size_t used = 0;
-          id = std::stoi(item, &used);
-          if (item.find_first_not_of(" ", used) != std::string::npos) throw std::invalid_argument(item);
-        } catch (const std::exception&) {
-          throw InputError(Where(model, e), "bad point id '" + item + "' (expected points:101,102)");
-        }
-        const TestPoint* found = nullptr;
-        for (const TestPoint& p : model.points)
-          if (p.id == id) found = &p;
-        if (!found) throw InputError(Where(model, e), "no test point " + std::to_string(id));
-        targets.push_back(found);
-      }
-    } else {
-      throw InputError(Where(model, e), "target must be 'all_points' or 'points:101,102'");
-    }
-    std::vector<PointMass> added;
-    for (const TestPoint* p : targets) added.push_back({"added_mass@" + std::to_string(p->id), p->where, m, e.line});
-    model.masses.insert(model.masses.end(), added.begin(), added.end());
-  } else if (e.kind == "mass_scale") {
-    const double f = Param(model, e, "factor", true);
-    Body& b = TargetBody(model, e);
-    b.mass *= f;
-    b.inertia *= f;
-    b.products *= f;
-  } else if (e.kind == "ground_spring") {
-    const double k = Param(model, e, "k", false);
-    const Body& b = TargetBody(model, e);
-    static const char* kAxis[] = {"x", "y", "z"};
-    for (int i = 0; i < 3; ++i) {
-      Spring s;
-      s.name = "ground_spring:" + b.name + ":" + kAxis[i];
-      s.group = "ground_spring";
-      s.a.body = b.name;
-      s.b.body = kGround;
-      s.direction = Eigen::Vector3d::Unit(i);
-      s.law = LinearLaw{k};
-      s.line = e.line;
-      model.springs.push_back(std::move(s));
-    }
-  } else {
+  const EffectKindInfo* info = FindEffectKind(e.kind);
+  if (!info) {
     std::string kinds;
     for (const auto& k : EffectKinds()) kinds += (kinds.empty() ? "" : ", ") + k;
-    throw InputError(Where(model, e), "unknown effect kind (allowed: " + kinds + ")");
+    throw InputError(Where(input, e), "unknown effect kind (allowed: " + kinds + ")");
   }
+  Model model = input;
+  info->apply(model, e);
   return model;
 }
 
@@ -234,6 +297,136 @@ std::string Describe(const Effect& e) {
     if (const auto* lin = std::get_if<LinearLaw>(&e.law->value)) s << "(k=" << lin->k << ")";
   }
   return s.str();
+}
+
+
+double OperatingValue(const Spring& s) {
+  if (!s.law.IsNonlinear()) return std::numeric_limits<double>::quiet_NaN();
+  const SpringState st = LinearizeLaw(s.law, "spring '" + s.name + "'");
+  if (const auto* ser = std::get_if<SeriesLaw>(&s.law.value)) {
+    bool film = false;
+    for (const Law& el : ser->elements) film |= std::holds_alternative<AirFilmLaw>(el.value);
+    return film ? ser->setting : ser->force.value_or(st.force);
+  }
+  if (const auto* a = std::get_if<AirFilmLaw>(&s.law.value)) return a->operating_gap;
+  if (const auto* t = std::get_if<TableLaw>(&s.law.value))
+    return (!t->operating_deflection && t->operating_force) ? *t->operating_force : st.deflection;
+  if (const auto* h = std::get_if<HertzLaw>(&s.law.value))
+    return (!h->operating_deflection && h->operating_force) ? *h->operating_force : st.deflection;
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+namespace {
+
+// Where a spring end sits, for "the same two points": body (or node) and position.
+struct EndKey {
+  std::string body;
+  int node = 0;
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+  bool Same(const EndKey& o) const {
+    return body == o.body && node == o.node && (at - o.at).norm() <= 1e-9 * std::max(1.0, at.norm());
+  }
+};
+
+EndKey EndOf(const Model& m, const Anchor& a, const Anchor* fallback) {
+  EndKey k;
+  k.body = a.body;
+  k.node = a.node;
+  if (a.IsNode()) return k;
+  if (a.has_at) {
+    k.at = a.at;
+  } else if (fallback && fallback->has_at) {
+    k.at = fallback->at;  // b.at defaults to a.at
+  } else if (const Body* b = m.FindBody(a.body)) {
+    k.at = b->centre;
+  }
+  return k;
+}
+
+std::string CommonPrefix(const std::vector<std::string>& names) {
+  if (names.empty()) return "";
+  std::string p = names.front();
+  for (const std::string& n : names) {
+    size_t i = 0;
+    while (i < p.size() && i < n.size() && p[i] == n[i]) ++i;
+    p.resize(i);
+  }
+  return p;
+}
+
+}  // namespace
+
+std::vector<Member> Members(const Model& model) {
+  std::vector<Member> out;
+  std::vector<std::string> groups;
+  for (const Spring& s : model.springs)
+    if (std::find(groups.begin(), groups.end(), s.group) == groups.end()) groups.push_back(s.group);
+  for (const std::string& g : groups) {
+    // Explicit members first by name, then implicit ones by their two ends.
+    std::vector<Member> members;
+    std::vector<std::pair<EndKey, EndKey>> keys;
+    std::vector<bool> explicit_name;
+    for (size_t i = 0; i < model.springs.size(); ++i) {
+      const Spring& s = model.springs[i];
+      if (s.group != g) continue;
+      if (!s.member.empty()) {
+        auto it = std::find_if(members.begin(), members.end(), [&](const Member& m) { return m.name == s.member; });
+        size_t at = static_cast<size_t>(it - members.begin());
+        for (size_t j = 0; j < members.size(); ++j)
+          if (explicit_name[j] && members[j].name == s.member) at = j;
+        if (at < members.size() && explicit_name[at]) {
+          members[at].springs.push_back(static_cast<int>(i));
+        } else {
+          members.push_back({g, s.member, {static_cast<int>(i)}});
+          keys.push_back({});
+          explicit_name.push_back(true);
+        }
+        continue;
+      }
+      const EndKey a = EndOf(model, s.a, nullptr), b = EndOf(model, s.b, &s.a);
+      size_t at = members.size();
+      for (size_t j = 0; j < members.size(); ++j)
+        if (!explicit_name[j] && keys[j].first.Same(a) && keys[j].second.Same(b)) at = j;
+      if (at < members.size()) {
+        members[at].springs.push_back(static_cast<int>(i));
+      } else {
+        members.push_back({g, "", {static_cast<int>(i)}});
+        keys.push_back({a, b});
+        explicit_name.push_back(false);
+      }
+    }
+    // Names of implicit members: the longest common prefix, or the first spring's name when
+    // they share none or the prefix is not unique in the group.
+    std::vector<std::string> prefix(members.size());
+    for (size_t j = 0; j < members.size(); ++j) {
+      if (explicit_name[j]) continue;
+      std::vector<std::string> names;
+      for (int i : members[j].springs) names.push_back(model.springs[i].name);
+      prefix[j] = names.size() > 1 ? CommonPrefix(names) : names.front();
+    }
+    for (size_t j = 0; j < members.size(); ++j) {
+      if (explicit_name[j]) continue;
+      bool unique = !prefix[j].empty();
+      for (size_t o = 0; o < members.size() && unique; ++o)
+        if (o != j && (explicit_name[o] ? members[o].name : prefix[o]) == prefix[j]) unique = false;
+      members[j].name = unique ? prefix[j] : model.springs[members[j].springs.front()].name;
+    }
+    for (Member& m : members) out.push_back(std::move(m));
+  }
+  return out;
+}
+
+std::vector<int> TargetSprings(const Model& model, const std::string& target) {
+  std::vector<int> out;
+  for (size_t i = 0; i < model.springs.size(); ++i)
+    if (model.springs[i].group == target) out.push_back(static_cast<int>(i));
+  if (!out.empty()) return out;
+  const auto slash = target.find('/');
+  if (slash == std::string::npos) return out;
+  const std::string group = target.substr(0, slash), name = target.substr(slash + 1);
+  for (const Member& m : Members(model))
+    if (m.group == group && m.name == name) return m.springs;
+  return out;
 }
 
 }  // namespace ema::model

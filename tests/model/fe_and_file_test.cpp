@@ -260,6 +260,32 @@ TEST(ModelFile, WriteWithEffectsKeepsFileAndRoundTrips) {
   EXPECT_LT(Solve(m).modes.modes[0].frequency_hz, Solve(original_model).modes.modes[0].frequency_hz);
 }
 
+TEST(ModelFile, WrittenElsewhereRewritesRelativePathsAndLoads) {
+  // The carriage's air-film curve is a relative `file =`: written into another folder, the model
+  // must still find it (the path is rewritten relative to the output), and nothing else changes.
+  const fs::path dir = testing::TempDir("file_elsewhere");
+  const fs::path in = WriteCarriage(dir);
+  const fs::path out = dir / "deeper" / "still" / "updated.toml";
+  fs::create_directories(out.parent_path());
+  Effect scale{"mass_scale", "carriage", {{"factor", 1.0625}}, std::nullopt, 0};
+  formats::WriteModelWithEffects(in, out, {scale});
+  std::ifstream b(out);
+  const std::string updated((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_NE(updated.find("\"../../film.csv\""), std::string::npos) << updated;
+  const Model m = formats::ReadModelFile(out);
+  const Model original = formats::ReadModelFile(in);
+  ASSERT_EQ(m.effects.size(), 1u);
+  // Same curve, same solution once the effect is taken out.
+  Model without = m;
+  without.effects.clear();
+  EXPECT_DOUBLE_EQ(Solve(without).modes.modes[0].frequency_hz, Solve(original).modes.modes[0].frequency_hz);
+  // Written next to the input, the path is left as it was.
+  formats::WriteModelWithEffects(in, dir / "same.toml", {});
+  std::ifstream c(dir / "same.toml"), a(in);
+  const std::string same((std::istreambuf_iterator<char>(c)), {}), input((std::istreambuf_iterator<char>(a)), {});
+  EXPECT_EQ(same, input);
+}
+
 }  // namespace
 }  // namespace ema::model
 

@@ -15,7 +15,9 @@ namespace ema::formats {
 /// against the model file's folder. Effects are returned pending in Model::effects.
 model::Model ReadModelFile(const std::filesystem::path& path);
 
-/// Copies `in_model` verbatim to `out` (atomic write) and appends one [[effect]] block per effect.
+/// Copies `in_model` to `out` (atomic write) and appends one [[effect]] block per effect. Relative
+/// paths in it (law `file =`, [fe] mass/stiffness/dofs/nodes) are rewritten to stay valid from
+/// the folder of `out`; everything else is kept byte for byte.
 void WriteModelWithEffects(const std::filesystem::path& in_model, const std::filesystem::path& out,
                            const std::vector<model::Effect>& effects);
 

@@ -1,10 +1,13 @@
 // Effects: physical phenomena added on top of the base model (model-format.md, "Effects").
-// Each kind is a small transformation of a Model value:
-//  * series_compliance(group, law): every spring of the group gets `law` in series (a series
-//    chain is extended, so an air-film chain re-solves its equilibrium with the extra element);
-//  * stiffness_scale(group, factor): linearised stiffness of the group's springs x factor;
-//  * operating_point(group, value): replaces the setting / gap / operating deflection or force of
-//    the group's non-linear laws;
+// Every kind is one row of a typed table (EffectKindTable): its enum, the name used in model
+// files, its free parameter, the range diagnosis searches, its default prior and the function
+// that applies it to a Model. ApplyEffect dispatches through the table; nothing else switches on
+// kind strings.
+//  * series_compliance(group | group/member, law): every spring of the target gets `law` in
+//    series (a series chain is extended, so an air-film chain re-solves its equilibrium);
+//  * stiffness_scale(group | group/member, factor): linearised stiffness of the springs x factor;
+//  * operating_point(group | group/member, value): replaces the setting / gap / operating
+//    deflection or force of the target's non-linear laws;
 //  * added_mass("points:101,102" | "all_points", mass): a point mass `mass` at each test point;
 //  * mass_scale(body, factor): mass, inertia and products of the body x factor;
 //  * ground_spring(body, k): three translational springs of stiffness k (X, Y, Z) from the body
@@ -18,6 +21,47 @@
 
 namespace ema::model {
 
+enum class EffectKind { kSeriesCompliance, kStiffnessScale, kOperatingPoint, kAddedMass, kMassScale, kGroundSpring };
+
+/// What an effect's target names.
+enum class EffectTarget {
+  kSprings,  ///< a spring group ("joints") or one member of it ("joints/J3")
+  kPoints,   ///< "all_points" or "points:101,102"
+  kBody,     ///< a body name
+};
+
+/// The shape of a parameter's prior (model-format.md "Prior knowledge", docs/diagnose.md).
+enum class PriorShape {
+  kLogNormal,   ///< ln(value / reference) ~ N(0, σ²): factors, stiffnesses, operating values
+  kHalfNormal,  ///< value ~ |N(0, (σ·model mass)²)|: an unmodelled mass, σ a share of the model's mass
+};
+
+/// One row of the vocabulary.
+struct EffectKindInfo {
+  EffectKind kind;
+  const char* name;       ///< "series_compliance" (model files, JSON)
+  const char* parameter;  ///< the free parameter diagnosis fits: "k", "factor", "value", "mass"
+  EffectTarget target;
+  bool members;           ///< also applies to one member of a group ("GROUP/MEMBER")
+  /// Range searched by diagnosis, as multiples of the parameter's reference value (log scale).
+  double range_low, range_high;
+  /// Which end of the range means "no effect": -1 the low end (mass → 0), +1 the high end
+  /// (series k → ∞), 0 neither (a factor of 1 lies inside).
+  int absent_end;
+  PriorShape prior_shape;
+  double prior_sigma;     ///< default 1σ of the prior ([priors] `name` overrides it)
+  const char* prior_meaning;
+  const char* meaning;    ///< physical meaning, for --help and docs
+  /// Applies the effect to `model` in place (the row's "how applied"). Throws InputError.
+  void (*apply)(Model& model, const Effect& effect);
+};
+
+/// Every kind of the vocabulary, in the order of model-format.md.
+const std::vector<EffectKindInfo>& EffectKindTable();
+/// The row of a kind; nullptr for a name that is not in the vocabulary.
+const EffectKindInfo* FindEffectKind(const std::string& name);
+const EffectKindInfo& Info(EffectKind kind);
+
 /// Applies one effect to a copy of `model` (model.effects is left as it is). Throws InputError
 /// naming the effect when the kind is unknown, the target does not exist or does not apply, or a
 /// parameter is missing or out of range.
@@ -26,11 +70,12 @@ Model ApplyEffect(const Model& model, const Effect& effect);
 /// Applies the model's own pending [[effect]] blocks in order and clears model.effects.
 Model ApplyEffects(const Model& model);
 
-/// Every kind of the vocabulary on every target it applies to, with nominal starting parameters
-/// (see docs/model.md): series_compliance k = the group's mean linearised stiffness (halves it);
-/// stiffness_scale factor 1; operating_point value = the group's current operating value (only
-/// groups with non-linear laws); added_mass all_points mass 0 (only with test points);
-/// mass_scale factor 1 per body; ground_spring k = 1e-3 x the mean linearised spring stiffness.
+/// Every kind of the vocabulary on every group-level target it applies to, with nominal
+/// starting parameters (see docs/model.md): series_compliance k = the group's mean linearised
+/// stiffness (halves it); stiffness_scale factor 1; operating_point value = the group's current
+/// operating value (only groups with non-linear laws); added_mass all_points mass 0 (only with
+/// test points); mass_scale factor 1 per body; ground_spring k = 1e-3 x the mean linearised
+/// spring stiffness.
 std::vector<Effect> CandidateEffects(const Model& model);
 
 /// The effect kinds of the vocabulary, in the order of model-format.md.
@@ -38,5 +83,27 @@ const std::vector<std::string>& EffectKinds();
 
 /// "kind target k=v ..." for messages and reports.
 std::string Describe(const Effect& effect);
+
+/// One member of a spring group (model-format.md "Members"): a joint, bolt, pad or mount.
+struct Member {
+  std::string group;
+  std::string name;
+  std::vector<int> springs;  ///< indices into Model::springs
+  std::string Target() const { return group + "/" + name; }
+};
+
+/// The members of every group, groups in order of first appearance. A spring's member is its
+/// `member` key; otherwise the springs of one group joining the same two points form one member,
+/// named by the longest common prefix of their names, or by the first spring's name when they
+/// share none (or when that prefix is already another member's name in the group).
+std::vector<Member> Members(const Model& model);
+
+/// The spring indices a spring-group target names: "GROUP" (every spring of the group) or
+/// "GROUP/MEMBER". Empty when nothing matches.
+std::vector<int> TargetSprings(const Model& model, const std::string& target);
+
+/// The operating value of a spring's non-linear law (setting, gap, deflection or force); NaN for
+/// a linear law.
+double OperatingValue(const Spring& spring);
 
 }  // namespace ema::model

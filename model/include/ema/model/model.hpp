@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -105,6 +106,8 @@ struct Body {
   Eigen::Vector3d products = Eigen::Vector3d::Zero();
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();   ///< m, global
   int line = 0;                                       ///< source line, 0 if built in code
+  /// Relative 1σ of mass and inertia (model-format.md "Prior knowledge"); NaN: not given.
+  double uncertainty = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Where a spring end, point mass or test point sits: on a body at a global position, or at an
@@ -139,6 +142,11 @@ struct Spring {
   Law law;
   double stiffness_factor = 1.0;  ///< multiplies the linearised stiffness (stiffness_scale effect)
   int line = 0;
+  /// One joint, bolt, pad or mount of the group (model-format.md "Members"); empty: derived from
+  /// the spring ends (see MemberNames in effects.hpp).
+  std::string member;
+  /// Relative 1σ of the stiffness, as 1σ of ln(factor) (model-format.md "Prior knowledge"); NaN: not given.
+  double uncertainty = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Modal damping: one ratio for every mode, or per elastic mode in frequency order (the last
@@ -205,6 +213,9 @@ struct Model {
   /// are still pending, so a model read from a file is always solved with its [[effect]] blocks.
   std::vector<Effect> effects;
   FeMatrices fe;
+  /// [priors]: default prior 1σ per effect kind where an item has no `uncertainty`
+  /// (model-format.md "Prior knowledge"); keys are effect kind names.
+  std::map<std::string, double> priors;
   std::string origin;  ///< model file path, for messages
 
   const Body* FindBody(const std::string& name) const;

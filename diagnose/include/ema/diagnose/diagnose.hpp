@@ -1,0 +1,157 @@
+// Which physical effects is the model missing, where, and how sure is that? (docs/diagnose.md)
+//
+// Stages: candidates (every kind of the vocabulary on every group, member, point and body it
+// applies to) → screening (a coarse scan of each candidate's parameter) → fits (the promising
+// singles, Ceres, maximum a-posteriori under each parameter's prior) → combinations (forward
+// selection of up to three effects with joint re-fitting and a backward check) → ranking (by
+// the Laplace approximation of each candidate's evidence, as posterior probabilities that sum
+// to 1 with "none") → explanation (in words, with the error falling as each effect is added).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ema/core/progress.hpp"
+#include "ema/core/types.hpp"
+#include "ema/correlation/dof_match.hpp"
+#include "ema/correlation/pairing.hpp"
+#include "ema/model/model.hpp"
+
+namespace ema::diagnose {
+
+/// The test modes of one setup ("" = the model's nominal operating points).
+struct SetupModes {
+  std::string setup;
+  ModeSet modes;
+};
+
+/// How candidates are ranked. kEvidence (default): the Laplace approximation of the posterior
+/// evidence (misfit + prior + the posterior's width). kBic / kAicc: information criteria that
+/// ignore the priors (kept for comparison).
+enum class Criterion { kEvidence, kBic, kAicc };
+/// "evidence", "bic", "aicc".
+std::string CriterionToString(Criterion criterion);
+/// The criterion of a name; false for an unknown name.
+bool StringToCriterion(const std::string& name, Criterion* criterion);
+
+struct DiagnoseOptions {
+  /// Relative 1σ floor of a test frequency: a mode's σ is max(its measured σ, floor × f). The
+  /// measured σ is the mode's frequency_spread_hz (stabilisation spread from `ema fit`) when the
+  /// modes file carries it. 1e-3: what a hammer test repeats to (nothing is gained by fitting
+  /// below it).
+  double frequency_floor = 1e-3;
+  /// 1σ of (1 − MAC): shapes are measured far less precisely than frequencies.
+  double shape_sigma = 0.01;
+  /// Residual of a test mode the model cannot pair: relative frequency error 0.5 and MAC 0.
+  double unpaired_frequency_residual = 0.5;
+  /// Huber threshold on one mode's residual pair, in σ: quadratic below, linear above, so one
+  /// badly fitted mode does not steer the fit.
+  double robust_threshold = 100.0;
+  Criterion criterion = Criterion::kEvidence;
+  /// Pairing while parameters move: MAC ≥ mac_min; a light frequency weight keeps modes that the
+  /// few test DOFs cannot tell apart on their nearest partner.
+  correlation::PairingOptions pairing{0.5, 0.05, 1.0};
+  correlation::DofMatchOptions dofs;
+  /// Members of groups (one joint, pad, mount) and single points are candidates too.
+  bool members = true;
+  /// Screening: grid points of the scan over one parameter's (log) range.
+  int scan_points = 9;
+  /// Member and single-point candidates fitted fully after screening (the best by their screened
+  /// posterior); group, body and all-points candidates are always fitted.
+  int max_fitted_singles = 14;
+  /// Combinations: up to `max_effects` effects; `beam` best sets grow at each step, each by its
+  /// `additions` best screened additions (re-fitted jointly).
+  int max_effects = 3;
+  int beam = 3;
+  int additions = 4;
+  int max_iterations = 30;
+  ProgressCallback progress;
+
+  /// True when every option is in range; else false with the reason in *error (Ceres style).
+  bool IsValid(std::string* error) const;
+};
+
+/// One fitted parameter with its posterior 1σ.
+struct FittedParameter {
+  std::string effect_kind;
+  std::string target;
+  std::string name;      ///< "k" (series_compliance: the law's k), "factor", "value", "mass", "modulus"
+  double value = kNaN;
+  double sigma = kNaN;   ///< NaN when the posterior is singular
+  double prior_sigma = kNaN;  ///< the prior's 1σ (relative, see docs/diagnose.md)
+  double lower = kNaN, upper = kNaN;
+  bool at_bound = false;
+};
+
+/// One mode of one setup before/after.
+struct ModeComparison {
+  std::string setup;
+  int test_mode = -1;   ///< index into that setup's test modes
+  int model_mode = -1;  ///< -1: unpaired
+  double test_frequency_hz = kNaN;
+  double model_frequency_hz = kNaN;
+  double agreement_pct = kNaN;
+  double mac = kNaN;
+};
+
+/// One outcome: the baseline ("none"), one effect, or several.
+struct Candidate {
+  std::vector<model::Effect> effects;       ///< with fitted parameters; empty for "none"
+  std::vector<FittedParameter> parameters;
+  std::string kind;                         ///< "none", an effect kind, or "kind1+kind2"
+  std::string target;                       ///< "" for none, "t1+t2" for several
+  double cost = kNaN;                       ///< robust sum of squared residuals in σ
+  double log_prior = 0.0;                   ///< log prior density at the fitted parameters
+  double log_evidence = kNaN;               ///< Laplace approximation
+  double score = kNaN;                      ///< −2 log evidence (or the criterion); lower is better
+  double probability = kNaN;                ///< posterior probability among all ranked candidates
+  double explained_pct = kNaN;              ///< 100 (1 − J/J_baseline)
+  double mean_abs_frequency_error_pct = kNaN;  ///< over paired modes of all setups
+  double mean_mac = kNaN;
+  double mean_agreement_pct = kNaN;
+  int paired_modes = 0;
+  std::vector<ModeComparison> modes;
+  bool plausible = true;                    ///< false when a parameter ends at its far bound
+  std::vector<std::string> tied_with;       ///< candidates the data cannot tell apart
+  std::string error;                        ///< non-empty when the candidate could not be evaluated
+  int rank = 0;                             ///< 1 = most likely
+  Eigen::VectorXd residuals;                ///< weighted residuals, for the tie test
+};
+
+/// The error falling as rank 1's effects are added one at a time (each subset re-fitted).
+struct Step {
+  std::string added;  ///< the effect added at this step ("" for the baseline)
+  double mean_abs_frequency_error_pct = kNaN;
+  double mean_mac = kNaN;
+  double mean_agreement_pct = kNaN;
+};
+
+struct Diagnosis {
+  Candidate baseline;                 ///< the model as given (also in `candidates` as "none")
+  std::vector<Candidate> candidates;  ///< ranked, rank 1 first; includes "none"
+  std::vector<Step> steps;            ///< baseline, then rank 1's effects added in turn
+  std::string explanation;            ///< in words, for the user
+  int residual_count = 0;
+  int test_mode_count = 0;
+  int model_solves = 0;
+  int candidates_screened = 0;        ///< single candidates scanned
+};
+
+/// Ranks the candidate missing effects of `model` against `tests` (one entry per setup).
+/// Throws InputError when a setup is not defined by the model, when test nodes are not test
+/// points of the model, or when too few modes pair to fit any parameter; UsageError for invalid
+/// options.
+Diagnosis Diagnose(const model::Model& model, const std::vector<SetupModes>& tests, const DiagnoseOptions& options = {});
+
+/// The words for one candidate's effect(s), e.g. "a compliance of 6.4 N/µm in series with member
+/// 'J3' of group 'joints'".
+std::string DescribeCandidate(const Candidate& candidate);
+
+/// The JSON parameter key of each of a candidate's parameters: `name` for one effect,
+/// `kind.name` for several (cli.md), `kind.name[target]` when a kind appears twice.
+std::vector<std::string> ParameterKeys(const Candidate& candidate);
+
+/// Defaults of the priors per kind, as text for --help and docs.
+std::string PriorDefaultsText();
+
+}  // namespace ema::diagnose

@@ -1,0 +1,227 @@
+// Stage 1, candidates: every kind of the vocabulary (model::EffectKindTable) on every target it
+// applies to — spring groups and their members, all points and single points, bodies — each
+// with its parameter's mapping, range and prior.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <set>
+
+#include "ema/core/error.hpp"
+#include "ema/model/solve.hpp"
+#include "internal.hpp"
+
+namespace ema::diagnose::detail {
+namespace {
+
+using model::EffectKind;
+
+// Radius of the Hertz series element: only E'·sqrt(R') is identifiable from stiffness, so R' is
+// fixed (1 mm, a ball-joint scale) and the modulus is fitted.
+constexpr double kHertzRadius = 1e-3;
+constexpr double kHertzModulus = 1e10;  // reference (prior centre) of the fitted modulus, Pa
+
+double TotalMass(const model::Model& m) {
+  double total = 0.0;
+  for (const auto& b : m.bodies) total += b.mass;
+  for (const auto& p : m.masses) total += p.mass;
+  if (!m.fe.Empty()) {
+    // FE: the translational mass of the matrices, from the direction that carries the most
+    // (the diagonal sum of its rows; a lumped matrix gives the mass exactly, a consistent one
+    // about 3/4 of it).
+    double per_direction[3] = {0.0, 0.0, 0.0};
+    for (size_t i = 0; i < m.fe.dofs.size(); ++i)
+      if (m.fe.dofs[i].dof <= 3)
+        per_direction[m.fe.dofs[i].dof - 1] +=
+            m.fe.mass.coeff(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
+    total += std::max({per_direction[0], per_direction[1], per_direction[2]});
+  }
+  return total > 0.0 ? total : 1.0;
+}
+
+// True when every spring of the set carries an air film's load (a lone film or a chain with
+// one), so that an added series element has a defined force at its operating point.
+bool CarriesFilmLoad(const model::Model& m, const std::vector<int>& springs) {
+  bool any = false;
+  for (int i : springs) {
+    const auto& spring = m.springs[i];
+    bool film = std::holds_alternative<model::AirFilmLaw>(spring.law.value);
+    if (const auto* chain = std::get_if<model::SeriesLaw>(&spring.law.value))
+      for (const auto& el : chain->elements) film |= std::holds_alternative<model::AirFilmLaw>(el.value);
+    if (!film) return false;
+    any = true;
+  }
+  return any;
+}
+
+struct SpringSet {
+  std::string target, group;
+  std::vector<int> springs;
+  bool member = false;
+};
+
+double PriorSigma(const model::Model& m, EffectKind kind, double item_sigma) {
+  if (std::isfinite(item_sigma)) return item_sigma;
+  const model::EffectKindInfo& info = model::Info(kind);
+  const auto it = m.priors.find(info.name);
+  return it != m.priors.end() ? it->second : info.prior_sigma;
+}
+
+Atom MakeAtom(const model::Model& m, EffectKind kind, const std::string& target, double ref, double item_sigma) {
+  const model::EffectKindInfo& info = model::Info(kind);
+  Atom a;
+  a.info = &info;
+  a.effect = model::Effect{info.name, target, {}, std::nullopt, 0};
+  a.spec = {info.parameter, ref, 1.0, true, std::log(info.range_low), std::log(info.range_high), info.absent_end};
+  a.prior.shape = info.prior_shape;
+  a.prior.sigma = PriorSigma(m, kind, item_sigma);
+  a.prior.relative_sigma = a.prior.sigma;
+  if (info.prior_shape == model::PriorShape::kHalfNormal) a.prior.sigma *= TotalMass(m);
+  return a;
+}
+
+}  // namespace
+
+double ParamSpec::Value(double theta) const { return log ? ref * std::exp(theta) : ref + scale * theta; }
+double ParamSpec::Derivative(double theta) const { return log ? ref * std::exp(theta) : scale; }
+double ParamSpec::Theta(double value) const { return log ? std::log(value / ref) : (value - ref) / scale; }
+
+double Prior::LogDensity(double theta, const ParamSpec& spec) const {
+  constexpr double kLogSqrt2Pi = 0.91893853320467274;
+  if (shape == model::PriorShape::kLogNormal) {
+    const double z = (theta - centre) / sigma;
+    return -0.5 * z * z - std::log(sigma) - kLogSqrt2Pi;
+  }
+  const double v = spec.Value(theta);
+  return std::log(2.0) - 0.5 * (v / sigma) * (v / sigma) - std::log(sigma) - kLogSqrt2Pi +
+         std::log(std::abs(spec.Derivative(theta)));
+}
+
+double Prior::Curvature(double theta, const ParamSpec& spec) const {
+  if (shape == model::PriorShape::kLogNormal) return 1.0 / (sigma * sigma);
+  const double v = spec.Value(theta);
+  // −d²/dθ² of −½ v²/σ² (+ θ, the log Jacobian): 2v²/σ² for v = ref·e^θ, scale²/σ² for linear.
+  return spec.log ? 2.0 * v * v / (sigma * sigma) : spec.scale * spec.scale / (sigma * sigma);
+}
+
+double Prior::Residual(double theta, const ParamSpec& spec) const {
+  if (shape == model::PriorShape::kLogNormal) return (theta - centre) / sigma;
+  return spec.Value(theta) / sigma;
+}
+
+model::Effect Atom::With(double theta) const {
+  model::Effect e = effect;
+  const double v = spec.Value(theta);
+  if (info->kind == EffectKind::kSeriesCompliance && hertz) {
+    model::HertzLaw law;
+    law.modulus = v;
+    law.radius = kHertzRadius;
+    e.law = model::Law(law);
+  } else if (info->kind == EffectKind::kSeriesCompliance) {
+    e.law = model::Law(model::LinearLaw{v});
+  } else {
+    e.parameters[spec.name] = v;
+  }
+  return e;
+}
+
+std::string Atom::Label() const {
+  return effect.kind + (hertz ? " (hertz)" : "") + " of '" + effect.target + "'";
+}
+
+std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& options) {
+  std::vector<Atom> atoms;
+  // Linearised stiffness of every spring at the nominal operating point.
+  std::vector<double> k(base.springs.size());
+  double k_all = 0.0;
+  for (size_t i = 0; i < base.springs.size(); ++i) {
+    const auto& s = base.springs[i];
+    k[i] = model::LinearizeLaw(s.law, base.Where(s.line) + ": spring '" + s.name + "'").stiffness * s.stiffness_factor;
+    k_all += k[i];
+  }
+  const double k_mean_all = base.springs.empty() ? 1e6 : k_all / base.springs.size();
+
+  // Spring targets: each group, then (with members) each member of a group with ≥ 2 members.
+  std::vector<SpringSet> sets;
+  std::vector<std::string> groups;
+  for (const auto& s : base.springs)
+    if (std::find(groups.begin(), groups.end(), s.group) == groups.end()) groups.push_back(s.group);
+  const std::vector<model::Member> members = model::Members(base);
+  for (const std::string& g : groups) {
+    sets.push_back({g, g, model::TargetSprings(base, g), false});
+    std::vector<const model::Member*> of_group;
+    for (const auto& mem : members)
+      if (mem.group == g) of_group.push_back(&mem);
+    if (options.members && of_group.size() >= 2)
+      for (const model::Member* mem : of_group) sets.push_back({mem->Target(), g, mem->springs, true});
+  }
+  for (const SpringSet& set : sets) {
+    double k_sum = 0.0, sigma = kNaN;
+    bool nonlinear = false, all_linear_equal = true;
+    double op = kNaN;
+    for (int i : set.springs) {
+      const auto& s = base.springs[i];
+      k_sum += k[i];
+      if (std::isfinite(s.uncertainty)) sigma = std::isfinite(sigma) ? std::max(sigma, s.uncertainty) : s.uncertainty;
+      if (s.law.IsNonlinear()) {
+        nonlinear = true;
+        if (!std::isfinite(op)) op = model::OperatingValue(s);
+      }
+      const auto* lin = std::get_if<model::LinearLaw>(&s.law.value);
+      if (!lin || std::abs(k[i] - k[set.springs.front()]) > 1e-9 * std::abs(k[i])) all_linear_equal = false;
+    }
+    const double k_mean = k_sum > 0.0 ? k_sum / set.springs.size() : 1e6;
+    // A series element on linear springs of one stiffness is exactly a stiffness factor < 1:
+    // the simpler reading (stiffness_scale) stands for both.
+    if (!all_linear_equal) {
+      Atom a = MakeAtom(base, EffectKind::kSeriesCompliance, set.target, k_mean, kNaN);
+      a.member = set.member;
+      a.group = set.group;
+      atoms.push_back(a);
+      // A series element in an air-film chain carries the film's load, so it may as well be a
+      // non-linear contact (a ball joint, thesis §7.2.4): its stiffness then differs between
+      // stud settings in a way no linear element reproduces.
+      if (!set.member && CarriesFilmLoad(base, set.springs)) {
+        Atom h = a;
+        h.hertz = true;
+        h.spec = {"modulus", kHertzModulus, 1.0, true, std::log(1e-3), std::log(1e3), +1};
+        h.prior.sigma = 3.0;
+        h.prior.relative_sigma = 3.0;
+        atoms.push_back(h);
+      }
+    }
+    Atom sc = MakeAtom(base, EffectKind::kStiffnessScale, set.target, 1.0, sigma);
+    sc.member = set.member;
+    sc.group = set.group;
+    atoms.push_back(sc);
+    if (nonlinear && std::isfinite(op)) {
+      Atom o = MakeAtom(base, EffectKind::kOperatingPoint, set.target, op, kNaN);
+      if (!(op > 0.0)) {
+        o.spec.log = false;
+        o.spec.scale = std::max(std::abs(op), 1e-6);
+        o.spec.lo = -10.0;
+        o.spec.hi = 10.0;
+      }
+      o.member = set.member;
+      o.group = set.group;
+      atoms.push_back(o);
+    }
+  }
+  // Points: all together, then (with members) one by one.
+  if (!base.points.empty()) {
+    const double per_point = TotalMass(base) / base.points.size();
+    atoms.push_back(MakeAtom(base, EffectKind::kAddedMass, "all_points", per_point, kNaN));
+    if (options.members && base.points.size() >= 2)
+      for (const auto& p : base.points) {
+        Atom a = MakeAtom(base, EffectKind::kAddedMass, "points:" + std::to_string(p.id), per_point, kNaN);
+        a.member = true;
+        atoms.push_back(a);
+      }
+  }
+  // Bodies.
+  for (const auto& b : base.bodies) atoms.push_back(MakeAtom(base, EffectKind::kMassScale, b.name, 1.0, b.uncertainty));
+  for (const auto& b : base.bodies)
+    atoms.push_back(MakeAtom(base, EffectKind::kGroundSpring, b.name, 0.1 * k_mean_all, kNaN));
+  return atoms;
+}
+
+}  // namespace ema::diagnose::detail

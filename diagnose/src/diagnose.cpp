@@ -1,0 +1,199 @@
+// Diagnose(): the stages in order (docs/diagnose.md). Each stage lives in its own file:
+// candidates.cpp → search.cpp (screening, fits, combinations) with fit.cpp → explain.cpp.
+#include "ema/diagnose/diagnose.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "ema/core/error.hpp"
+#include "ema/model/solve.hpp"
+#include "internal.hpp"
+
+namespace ema::diagnose {
+
+bool DiagnoseOptions::IsValid(std::string* error) const {
+  std::string why;
+  if (!(frequency_floor > 0.0)) why = "frequency_floor must be > 0, got " + std::to_string(frequency_floor);
+  else if (!(shape_sigma > 0.0)) why = "shape_sigma must be > 0, got " + std::to_string(shape_sigma);
+  else if (!(robust_threshold > 0.0)) why = "robust_threshold must be > 0, got " + std::to_string(robust_threshold);
+  else if (scan_points < 3) why = "scan_points must be >= 3, got " + std::to_string(scan_points);
+  else if (max_effects < 1 || max_effects > 3) why = "max_effects must be 1, 2 or 3, got " + std::to_string(max_effects);
+  else if (beam < 1 || additions < 1) why = "beam and additions must be >= 1";
+  else if (max_fitted_singles < 0) why = "max_fitted_singles must be >= 0";
+  if (error) *error = why;
+  return why.empty();
+}
+
+std::string CriterionToString(Criterion criterion) {
+  switch (criterion) {
+    case Criterion::kEvidence: return "evidence";
+    case Criterion::kBic: return "bic";
+    case Criterion::kAicc: return "aicc";
+  }
+  return "evidence";
+}
+
+bool StringToCriterion(const std::string& name, Criterion* criterion) {
+  for (Criterion c : {Criterion::kEvidence, Criterion::kBic, Criterion::kAicc})
+    if (name == CriterionToString(c)) {
+      *criterion = c;
+      return true;
+    }
+  return false;
+}
+
+namespace {
+
+using detail::Join;
+
+// Setups must exist; test nodes must be test points of the model.
+void CheckTests(const model::Model& base, const std::vector<SetupModes>& tests, const std::string& where) {
+  if (tests.empty()) throw InputError(where, "no test given; expected at least one set of test modes");
+  std::set<int> point_ids;
+  for (const auto& p : base.points) point_ids.insert(p.id);
+  std::set<std::string> setup_names;
+  for (const auto& s : base.setups) setup_names.insert(s.name);
+  for (const SetupModes& t : tests) {
+    const std::string source = t.modes.source.empty() ? "test" : t.modes.source;
+    if (!t.setup.empty() && !setup_names.count(t.setup)) {
+      std::vector<std::string> names(setup_names.begin(), setup_names.end());
+      throw InputError(where, "setup '" + t.setup + "' (for " + source + ") is not defined; the model's setups: " +
+                                  (names.empty() ? std::string("none") : Join(names, ", ")));
+    }
+    if (t.modes.modes.empty()) throw InputError(source, "no modes found; expected the test's fitted modes");
+    std::set<int> missing;
+    for (const Dof& d : t.modes.dofs)
+      if (!point_ids.count(d.node)) missing.insert(d.node);
+    if (!missing.empty()) {
+      std::vector<std::string> ids;
+      for (int id : missing) ids.push_back(std::to_string(id));
+      throw InputError(source, "test node(s) " + Join(ids, ", ") + " are not [[point]]s of the model " + where +
+                                   "; expected every test node to be a model test point");
+    }
+  }
+}
+
+// Baseline solve per setup: DOF matching is done once (the observed DOFs do not move); each
+// test frequency's σ is its measured spread or the floor.
+std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std::vector<SetupModes>& tests,
+                                             const DiagnoseOptions& options, int max_modes) {
+  std::vector<detail::SetupData> setups;
+  for (const SetupModes& t : tests) {
+    model::SolveOptions so;
+    so.setup = t.setup;
+    so.max_modes = max_modes;
+    const model::Solution sol = model::Solve(base, so);
+    detail::SetupData s;
+    s.name = t.setup;
+    s.match = correlation::MatchDofs(t.modes, sol.modes, options.dofs);
+    if (s.match.Count() == 0)
+      throw InputError(t.modes.source.empty() ? "test" : t.modes.source,
+                       "no test DOF is observed by the model (the model gives +X/+Y/+Z at its test points)");
+    s.test_shapes = s.match.TestShapes(t.modes);
+    const auto n = static_cast<Eigen::Index>(t.modes.modes.size());
+    s.test_hz.resize(n);
+    s.sigma_hz.resize(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Mode& m = t.modes.modes[static_cast<size_t>(i)];
+      s.test_hz(i) = m.frequency_hz;
+      const double measured = std::isfinite(m.frequency_spread_hz) ? m.frequency_spread_hz : 0.0;
+      s.sigma_hz(i) = std::max(measured, options.frequency_floor * m.frequency_hz);
+    }
+    s.model_dof_count = sol.modes.dofs.size();
+    setups.push_back(std::move(s));
+  }
+  return setups;
+}
+
+// The error falling as rank 1's effects are added one at a time, in the order of their single
+// evidence (each subset re-fitted).
+std::vector<Step> Steps(detail::Problem* p, const std::vector<detail::Fit>& fits, const detail::Fit& first,
+                        const Candidate& none, const DiagnoseOptions& options) {
+  std::vector<Step> steps;
+  steps.push_back({"", none.mean_abs_frequency_error_pct, none.mean_mac, none.mean_agreement_pct});
+  std::vector<int> order = first.atoms;
+  auto single_score = [&](int a) {
+    for (const auto& f : fits)
+      if (f.atoms.size() == 1 && f.atoms[0] == a && f.ok) return f.score;
+    return detail::kInf;
+  };
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return single_score(a) < single_score(b); });
+  std::vector<int> set;
+  for (int a : order) {
+    set.push_back(a);
+    std::vector<int> sorted = set;
+    std::sort(sorted.begin(), sorted.end());
+    const detail::Fit f = detail::FitSubset(p, fits, sorted, options);
+    if (!f.ok) break;
+    steps.push_back({p->Atoms()[a].Label(), f.eval->mean_abs_frequency_error_pct, f.eval->mean_mac,
+                     f.eval->mean_agreement_pct});
+  }
+  return steps;
+}
+
+}  // namespace
+
+Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes>& tests,
+                   const DiagnoseOptions& options) {
+  if (std::string bad; !options.IsValid(&bad)) throw UsageError("diagnose options: " + bad);
+  const std::string where = input_model.origin.empty() ? "model" : input_model.origin;
+  const model::Model base = model::ApplyEffects(input_model);
+  CheckTests(base, tests, where);
+  int max_test_modes = 0;
+  for (const SetupModes& t : tests) max_test_modes = std::max<int>(max_test_modes, t.modes.modes.size());
+  const int max_modes = base.fe.Empty() ? 0 : std::max(20, 2 * max_test_modes + 4);
+
+  detail::Evaluator evaluator(base, PrepareSetups(base, tests, options, max_modes), options, max_modes);
+  Diagnosis result;
+  result.residual_count = evaluator.ResidualCount();
+  result.test_mode_count = result.residual_count / 2;
+
+  // Stage 1: candidates.
+  const std::vector<detail::Atom> atoms = detail::BuildAtoms(base, options);
+  detail::Problem problem(&evaluator, &atoms);
+
+  // Baseline ("none").
+  const detail::Fit none_fit = detail::Assess(&problem, {}, {}, options);
+  if (!none_fit.ok) throw InputError(where, "the model cannot be solved: " + none_fit.error);
+  if (none_fit.eval->paired < 2) {
+    std::ostringstream msg;
+    msg << "only " << none_fit.eval->paired << " test mode(s) pair with a model mode (MAC ≥ " << options.pairing.mac_min
+        << "); at least 2 paired modes are needed to fit any parameter";
+    throw InputError(where, msg.str());
+  }
+  Candidate none = detail::MakeCandidate(&problem, none_fit, none_fit.eval->cost);
+  none.explained_pct = 0.0;
+
+  // Stages 2–4: screening, fits, combinations.
+  detail::SearchResult search = detail::Search(&problem, options);
+  result.candidates_screened = search.screened;
+
+  // Stage 5: ranking.
+  std::vector<Candidate> all;
+  all.push_back(none);
+  for (const detail::Fit& f : search.fits) all.push_back(detail::MakeCandidate(&problem, f, none.cost));
+  detail::Rank(&all, none);
+  for (const Candidate& c : all)
+    if (c.kind == "none") result.baseline = c;
+
+  // Stage 6: explanation, and the error falling as rank 1's effects are added.
+  result.explanation = detail::Explain(all, result.baseline);
+  if (all.front().effects.empty()) {
+    result.steps.push_back({"", none.mean_abs_frequency_error_pct, none.mean_mac, none.mean_agreement_pct});
+  } else {
+    for (const detail::Fit& f : search.fits)
+      if (problem.Effects(f.atoms, f.theta).size() == all.front().effects.size() && f.ok &&
+          std::abs(f.score - all.front().score) == 0.0) {
+        result.steps = Steps(&problem, search.fits, f, none, options);
+        break;
+      }
+  }
+  result.candidates = std::move(all);
+  result.model_solves = evaluator.Solves();
+  ReportProgress(options.progress, 1.0, "done");
+  return result;
+}
+
+}  // namespace ema::diagnose

@@ -1,0 +1,259 @@
+// Stages 5–6: ranking (posterior probabilities, plausibility, ties) and the explanation.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+
+#include "internal.hpp"
+
+namespace ema::diagnose {
+namespace detail {
+namespace {
+
+// "series_compliance (hertz) of 'bearings'", several joined by " + ".
+std::string CandidateLabel(const Candidate& c) {
+  if (c.effects.empty()) return c.kind;
+  std::vector<std::string> parts;
+  for (const model::Effect& e : c.effects) {
+    std::string label = e.kind;
+    if (e.kind == "series_compliance" && e.law) label += " (" + e.law->KindName() + ")";
+    parts.push_back(label + " of '" + e.target + "'");
+  }
+  return Join(parts, " + ");
+}
+
+// "group 'joints'", "member 'J3' of group 'joints'", "points 101", "body 'top'".
+std::string Where(const std::string& target) {
+  const auto slash = target.find('/');
+  if (slash != std::string::npos)
+    return "member '" + target.substr(slash + 1) + "' of group '" + target.substr(0, slash) + "'";
+  return "group '" + target + "'";
+}
+
+// True when one candidate's effects (kind and target) all appear in the other's.
+bool Nested(const Candidate& a, const Candidate& b) {
+  auto contains = [](const Candidate& big, const Candidate& small) {
+    for (const auto& e : small.effects) {
+      bool found = false;
+      for (const auto& f : big.effects) found |= e.kind == f.kind && e.target == f.target;
+      if (!found) return false;
+    }
+    return true;
+  };
+  return contains(a, b) || contains(b, a);
+}
+
+}  // namespace
+
+std::string FormatNumber(double v, int significant) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*g", significant, v);
+  return buffer;
+}
+
+std::string Join(const std::vector<std::string>& parts, const std::string& sep) {
+  std::string out;
+  for (size_t i = 0; i < parts.size(); ++i) out += (i ? sep : "") + parts[i];
+  return out;
+}
+
+Candidate MakeCandidate(Problem* p, const Fit& f, double baseline_cost) {
+  Candidate c;
+  const auto& atoms = p->Atoms();
+  std::vector<std::string> kinds, targets;
+  for (int a : f.atoms) {
+    kinds.push_back(atoms[a].effect.kind);
+    targets.push_back(atoms[a].effect.target);
+  }
+  c.kind = f.atoms.empty() ? "none" : Join(kinds, "+");
+  c.target = Join(targets, "+");
+  if (!f.ok) {
+    c.error = f.error.empty() ? "could not be evaluated" : f.error;
+    c.plausible = false;
+    for (int a : f.atoms) c.effects.push_back(atoms[a].effect);
+    return c;
+  }
+  c.effects = p->Effects(f.atoms, f.theta);
+  const Evaluation& e = *f.eval;
+  c.modes = e.modes;
+  c.mean_abs_frequency_error_pct = e.mean_abs_frequency_error_pct;
+  c.mean_mac = e.mean_mac;
+  c.mean_agreement_pct = e.mean_agreement_pct;
+  c.paired_modes = e.paired;
+  c.residuals = e.r;
+  c.cost = e.cost;
+  c.log_prior = f.log_prior;
+  c.log_evidence = f.log_evidence;
+  c.score = f.score;
+  c.explained_pct = baseline_cost > 0.0 ? 100.0 * (1.0 - c.cost / baseline_cost) : 0.0;
+  for (size_t i = 0; i < f.atoms.size(); ++i) {
+    const Atom& atom = atoms[f.atoms[i]];
+    const ParamSpec& s = atom.spec;
+    FittedParameter fp;
+    fp.effect_kind = atom.effect.kind;
+    fp.target = atom.effect.target;
+    fp.name = s.name;
+    fp.value = s.Value(f.theta[i]);
+    fp.sigma = std::abs(s.Derivative(f.theta[i])) * (f.sigma_theta.size() > static_cast<Eigen::Index>(i)
+                                                          ? f.sigma_theta(static_cast<Eigen::Index>(i))
+                                                          : kNaN);
+    fp.prior_sigma = atom.prior.relative_sigma;
+    fp.lower = s.Value(s.lo);
+    fp.upper = s.Value(s.hi);
+    const int end = BoundEnd(s, f.theta[i]);
+    fp.at_bound = end != 0;
+    // Sitting on the "absent" end just means the effect is not wanted; the other end means the
+    // fit wants an unphysical value.
+    if (end != 0 && end != s.absent_end) c.plausible = false;
+    c.parameters.push_back(fp);
+  }
+  return c;
+}
+
+void Rank(std::vector<Candidate>* all, const Candidate& none) {
+  // Posterior probabilities over every evaluated candidate (uniform prior over candidates).
+  double best = kInf;
+  for (const Candidate& c : *all)
+    if (c.error.empty() && std::isfinite(c.score)) best = std::min(best, c.score);
+  double sum = 0.0;
+  for (Candidate& c : *all) {
+    c.probability = c.error.empty() && std::isfinite(c.score) ? std::exp(-0.5 * (c.score - best)) : 0.0;
+    sum += c.probability;
+  }
+  for (Candidate& c : *all) c.probability = sum > 0.0 ? c.probability / sum : 0.0;
+  // Plausible candidates by score (with "none"), then implausible ones, then failures.
+  std::stable_sort(all->begin(), all->end(), [](const Candidate& a, const Candidate& b) {
+    const int ca = !a.error.empty() ? 2 : (a.plausible ? 0 : 1);
+    const int cb = !b.error.empty() ? 2 : (b.plausible ? 0 : 1);
+    if (ca != cb) return ca < cb;
+    if (ca == 2) return false;
+    return a.score < b.score;
+  });
+  for (size_t i = 0; i < all->size(); ++i) (*all)[i].rank = static_cast<int>(i) + 1;
+  // Ties in the data: residual changes that point the same way with misfits within 2 cannot be
+  // told apart by these data; only the priors then order them.
+  const int top = std::min<int>(6, all->size());
+  for (int a = 0; a < top; ++a) {
+    Candidate& ca = (*all)[a];
+    if (ca.kind == "none" || !ca.error.empty()) continue;
+    const Eigen::VectorXd da = ca.residuals - none.residuals;
+    for (int b = 0; b < top; ++b) {
+      const Candidate& cb = (*all)[b];
+      if (a == b || cb.kind == "none" || !cb.error.empty()) continue;
+      // A set and its own extension (one more effect at a neutral value) are not rival readings.
+      if (Nested(ca, cb)) continue;
+      const Eigen::VectorXd db = cb.residuals - none.residuals;
+      const double na = da.norm(), nb = db.norm();
+      if (na <= 0.0 || nb <= 0.0) continue;
+      const double cosine = da.dot(db) / (na * nb);
+      if (std::abs(cosine) > 0.95 && std::abs(ca.cost - cb.cost) < 2.0) ca.tied_with.push_back(CandidateLabel(cb));
+    }
+  }
+}
+
+std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
+  std::ostringstream words;
+  const Candidate& first = all.front();
+  auto pct = [](double v) { return FormatNumber(v, v < 10.0 ? 2 : 3) + " %"; };
+  auto prob = [](double p) { return FormatNumber(100.0 * p, p > 0.999 ? 4 : 3) + " %"; };
+  if (first.kind == "none") {
+    words << "No candidate effect explains the mismatch by more than its prior and parameter cost (probability "
+          << prob(first.probability) << "): the model as given agrees to a mean frequency error of "
+          << pct(none.mean_abs_frequency_error_pct) << " (mean MAC " << FormatNumber(none.mean_mac, 3) << ").";
+    // The effect that fits best (lowest misfit), whatever its probability.
+    const Candidate* closest = nullptr;
+    for (const Candidate& c : all)
+      if (c.kind != "none" && c.error.empty() && c.plausible && (!closest || c.cost < closest->cost)) closest = &c;
+    if (closest && closest->cost < none.cost)
+      words << " The effect that fits best, " << DescribeCandidate(*closest) << ", brings the misfit from "
+            << FormatNumber(none.cost, 3) << " to " << FormatNumber(closest->cost, 3) << " σ² over "
+            << none.modes.size() << " test modes (mean frequency error " << pct(closest->mean_abs_frequency_error_pct)
+            << "): not enough to pay for its parameters.";
+    return words.str();
+  }
+  words << DescribeCandidate(first) << " (probability " << prob(first.probability)
+        << ") brings the mean frequency error from " << pct(none.mean_abs_frequency_error_pct) << " to "
+        << pct(first.mean_abs_frequency_error_pct) << " (mean MAC " << FormatNumber(none.mean_mac, 3) << " → "
+        << FormatNumber(first.mean_mac, 3) << ", " << FormatNumber(first.explained_pct, 3)
+        << " % of the residual explained)";
+  for (size_t i = 1; i < all.size(); ++i) {
+    const Candidate& c = all[i];
+    // The next best *other* explanation: not a variant (another law) of the same one.
+    if (c.kind == "none" || !c.error.empty() || (c.kind == first.kind && c.target == first.target)) continue;
+    words << "; the next best, " << CandidateLabel(c) << " (probability " << prob(c.probability) << "), leaves "
+          << pct(c.mean_abs_frequency_error_pct);
+    break;
+  }
+  words << ".";
+  if (!first.tied_with.empty())
+    words << " The data alone cannot tell it apart from " << Join(first.tied_with, ", ")
+          << " (the priors order them): more modes, shapes or another setup would.";
+  return words.str();
+}
+
+}  // namespace detail
+
+using detail::FormatNumber;
+using detail::Join;
+
+std::string DescribeCandidate(const Candidate& c) {
+  if (c.effects.empty()) return "no missing effect";
+  std::vector<std::string> parts;
+  for (const model::Effect& e : c.effects) {
+    auto param = [&](const char* key) {
+      auto it = e.parameters.find(key);
+      return it == e.parameters.end() ? kNaN : it->second;
+    };
+    const model::HertzLaw* hertz = e.law ? std::get_if<model::HertzLaw>(&e.law->value) : nullptr;
+    const model::EffectKindInfo* info = model::FindEffectKind(e.kind);
+    const model::EffectKind kind = info ? info->kind : model::EffectKind::kStiffnessScale;
+    if (!info) {
+      parts.push_back(model::Describe(e));
+    } else if (kind == model::EffectKind::kSeriesCompliance && hertz) {
+      parts.push_back("a Hertz contact (E' = " + FormatNumber(hertz->modulus, 3) + " Pa, R' = " +
+                      FormatNumber(hertz->radius * 1e3, 3) + " mm) in series with " + detail::Where(e.target));
+    } else if (kind == model::EffectKind::kSeriesCompliance) {
+      double k = kNaN;
+      if (e.law)
+        if (const auto* lin = std::get_if<model::LinearLaw>(&e.law->value)) k = lin->k;
+      parts.push_back("a compliance of " + FormatNumber(k / 1e6, 3) + " N/µm in series with " + detail::Where(e.target));
+    } else if (kind == model::EffectKind::kStiffnessScale) {
+      parts.push_back("the stiffness of " + detail::Where(e.target) + " scaled by " + FormatNumber(param("factor"), 3));
+    } else if (kind == model::EffectKind::kOperatingPoint) {
+      const double v = param("value");
+      const std::string shown = std::abs(v) < 1e-3 ? FormatNumber(v * 1e6, 3) + " µm" : FormatNumber(v, 4);
+      parts.push_back("an operating point (setting/gap/preload) of " + shown + " for " + detail::Where(e.target));
+    } else if (kind == model::EffectKind::kAddedMass) {
+      const std::string at = e.target.rfind("points:", 0) == 0 ? "point " + e.target.substr(7) : e.target;
+      parts.push_back("an added mass of " + FormatNumber(param("mass") * 1e3, 3) + " g per point at " + at);
+    } else if (kind == model::EffectKind::kMassScale) {
+      parts.push_back("the mass and inertia of body '" + e.target + "' scaled by " + FormatNumber(param("factor"), 3));
+    } else {
+      parts.push_back("a spring to ground of " + FormatNumber(param("k") / 1e6, 3) + " N/µm on body '" + e.target + "'");
+    }
+  }
+  return Join(parts, " together with ");
+}
+
+std::vector<std::string> ParameterKeys(const Candidate& c) {
+  std::map<std::string, int> count;
+  for (const auto& p : c.parameters) ++count[p.effect_kind + "." + p.name];
+  std::vector<std::string> keys;
+  for (const auto& p : c.parameters) {
+    const std::string key = p.effect_kind + "." + p.name;
+    if (c.effects.size() <= 1) keys.push_back(p.name);
+    else if (count[key] == 1) keys.push_back(key);
+    else keys.push_back(key + "[" + p.target + "]");
+  }
+  return keys;
+}
+
+std::string PriorDefaultsText() {
+  std::ostringstream s;
+  for (const model::EffectKindInfo& info : model::EffectKindTable())
+    s << "  " << info.name << " = " << info.prior_sigma << "  (" << info.prior_meaning << ")\n";
+  return s.str();
+}
+
+}  // namespace ema::diagnose

@@ -1,0 +1,208 @@
+// Stage 3, fits: the maximum a-posteriori parameters of one set of effects (Ceres) and the
+// Laplace approximation of its evidence at that point:
+//   log Z ≈ −½ J(θ*) + log p(θ*) + (k/2) ln 2π − ½ ln det H,
+// J the robust misfit in σ, p the prior in θ, H = Σ_b w_b J_bᵀJ_b + prior curvature the
+// posterior Hessian (Gauss–Newton, Huber weights w_b per mode block).
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "internal.hpp"
+
+namespace ema::diagnose::detail {
+namespace {
+
+// Ceres' numeric step is relative to |x|; parameters are stored as x = θ + kOffset so that the
+// step (1e-4 |x| ≈ 1e-3 in θ, a 0.1 % change of the physical parameter) stays well above the
+// noise of the model's own root finders, whatever θ is.
+constexpr double kOffset = 10.0;
+constexpr double kRelativeStep = 1e-4;
+constexpr double kJacobianStep = 1e-3;  // central differences in θ for the Hessian
+
+struct ModeBlock {
+  Problem* problem;
+  std::vector<int> set;
+  int index;
+  bool operator()(double const* const* parameters, double* residuals) const {
+    std::vector<double> theta(set.size());
+    for (size_t k = 0; k < set.size(); ++k) theta[k] = parameters[0][k] - kOffset;
+    const auto e = problem->At(set, theta);
+    if (!e->ok) return false;
+    residuals[0] = e->r(2 * index);
+    residuals[1] = e->r(2 * index + 1);
+    return true;
+  }
+};
+
+struct PriorBlock {
+  const Atom* atom;
+  int index;
+  bool operator()(double const* const* parameters, double* residuals) const {
+    residuals[0] = atom->prior.Residual(parameters[0][index] - kOffset, atom->spec);
+    return std::isfinite(residuals[0]);
+  }
+};
+
+}  // namespace
+
+std::shared_ptr<const Evaluation> Problem::At(const std::vector<int>& set, const std::vector<double>& theta) {
+  for (const auto& [key, value] : cache_)
+    if (key.first == set && key.second == theta) return value;
+  auto value = std::make_shared<const Evaluation>(evaluator_->Evaluate(Effects(set, theta)));
+  cache_.emplace_back(std::make_pair(set, theta), value);
+  if (cache_.size() > 24) cache_.pop_front();
+  return value;
+}
+
+std::vector<model::Effect> Problem::Effects(const std::vector<int>& set, const std::vector<double>& theta) const {
+  std::vector<model::Effect> effects;
+  for (size_t k = 0; k < set.size(); ++k) effects.push_back((*atoms_)[set[k]].With(theta[k]));
+  return effects;
+}
+
+double Problem::LogPrior(const std::vector<int>& set, const std::vector<double>& theta) const {
+  double lp = 0.0;
+  for (size_t k = 0; k < set.size(); ++k) {
+    const Atom& a = (*atoms_)[set[k]];
+    lp += a.prior.LogDensity(theta[k], a.spec);
+  }
+  return lp;
+}
+
+double Problem::Objective(const std::vector<int>& set, const std::vector<double>& theta) {
+  const auto e = At(set, theta);
+  if (!e->ok) return kInf;
+  // The MAP objective: the prior's residuals (without the log Jacobian), as Ceres minimises it.
+  double prior = 0.0;
+  for (size_t k = 0; k < set.size(); ++k) {
+    const Atom& a = (*atoms_)[set[k]];
+    const double r = a.prior.Residual(theta[k], a.spec);
+    prior += 0.5 * r * r;
+  }
+  return 0.5 * e->cost + prior;
+}
+
+Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<double>& theta,
+           const DiagnoseOptions& options) {
+  Fit f;
+  f.atoms = set;
+  f.theta = theta;
+  f.eval = problem->At(set, theta);
+  if (!f.eval->ok) {
+    f.error = f.eval->error;
+    return f;
+  }
+  f.ok = true;
+  f.objective = problem->Objective(set, theta);
+  f.log_prior = problem->LogPrior(set, theta);
+  const int k = static_cast<int>(set.size());
+  const int n = problem->ResidualCount();
+  const double a = options.robust_threshold;
+  f.sigma_theta = Eigen::VectorXd::Constant(k, kNaN);
+  if (k == 0) {
+    f.log_evidence = -0.5 * f.eval->cost;
+  } else {
+    // Central-difference Jacobian of the residuals in θ.
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(n, k);
+    bool ok = true;
+    for (int i = 0; i < k && ok; ++i) {
+      std::vector<double> plus = theta, minus = theta;
+      plus[i] += kJacobianStep;
+      minus[i] -= kJacobianStep;
+      const auto ep = problem->At(set, plus);
+      const auto em = problem->At(set, minus);
+      if (!ep->ok || !em->ok) ok = false;
+      else jac.col(i) = (ep->r - em->r) / (2.0 * kJacobianStep);
+    }
+    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(k, k);
+    if (ok) {
+      for (int b = 0; b + 1 < n; b += 2) {
+        const double s = f.eval->r(b) * f.eval->r(b) + f.eval->r(b + 1) * f.eval->r(b + 1);
+        const double w = s <= a * a ? 1.0 : a / std::sqrt(s);
+        h += w * jac.middleRows(b, 2).transpose() * jac.middleRows(b, 2);
+      }
+    }
+    for (int i = 0; i < k; ++i) {
+      const Atom& atom = problem->Atoms()[set[i]];
+      // A floor of one over the searched range keeps H regular where neither data nor prior bind.
+      const double width = atom.spec.hi - atom.spec.lo;
+      h(i, i) += atom.prior.Curvature(theta[i], atom.spec) + 1.0 / (width * width);
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(h);
+    double log_det = 0.0;
+    bool pd = ldlt.info() == Eigen::Success && ldlt.isPositive();
+    if (pd)
+      for (int i = 0; i < k; ++i) {
+        const double d = ldlt.vectorD()(i);
+        if (!(d > 0.0)) pd = false;
+        else log_det += std::log(d);
+      }
+    if (!pd) log_det = (h.diagonal().array().max(1e-300)).log().sum();
+    // The structure prior: every set of k effects out of the N candidates is a priori as likely
+    // as the others of its size, so each effect costs ln N (many look-alike candidates — one per
+    // point, per member — must not fit the noise by sheer number).
+    const double structure = -k * std::log(static_cast<double>(problem->Atoms().size()));
+    f.log_evidence = -0.5 * f.eval->cost + f.log_prior + 0.5 * k * std::log(2.0 * M_PI) - 0.5 * log_det + structure;
+    if (ok && pd) f.sigma_theta = ldlt.solve(Eigen::MatrixXd::Identity(k, k)).diagonal().cwiseSqrt();
+  }
+  switch (options.criterion) {
+    case Criterion::kEvidence:
+      f.score = -2.0 * f.log_evidence;
+      break;
+    case Criterion::kBic:
+      f.score = f.eval->cost + k * std::log(static_cast<double>(n));
+      break;
+    case Criterion::kAicc:
+      f.score = f.eval->cost + 2.0 * k + (n - k - 1 > 0 ? 2.0 * k * (k + 1) / (n - k - 1) : 1e9);
+      break;
+  }
+  return f;
+}
+
+Fit FitSet(Problem* problem, const std::vector<int>& set, const std::vector<double>& start,
+           const DiagnoseOptions& options) {
+  const int k = static_cast<int>(set.size());
+  std::vector<double> x(k);
+  for (int i = 0; i < k; ++i) x[i] = start[i] + kOffset;
+  ceres::Problem cp;
+  ceres::NumericDiffOptions nd;
+  nd.relative_step_size = kRelativeStep;
+  for (int m = 0; m < problem->ResidualCount() / 2; ++m) {
+    auto* cost = new ceres::DynamicNumericDiffCostFunction<ModeBlock, ceres::CENTRAL>(
+        new ModeBlock{problem, set, m}, ceres::TAKE_OWNERSHIP, nd);
+    cost->AddParameterBlock(k);
+    cost->SetNumResiduals(2);
+    cp.AddResidualBlock(cost, new ceres::HuberLoss(options.robust_threshold), x.data());
+  }
+  for (int i = 0; i < k; ++i) {
+    auto* cost = new ceres::DynamicNumericDiffCostFunction<PriorBlock, ceres::CENTRAL>(
+        new PriorBlock{&problem->Atoms()[set[i]], i}, ceres::TAKE_OWNERSHIP, nd);
+    cost->AddParameterBlock(k);
+    cost->SetNumResiduals(1);
+    cp.AddResidualBlock(cost, nullptr, x.data());
+  }
+  for (int i = 0; i < k; ++i) {
+    const ParamSpec& s = problem->Atoms()[set[i]].spec;
+    cp.SetParameterLowerBound(x.data(), i, s.lo + kOffset);
+    cp.SetParameterUpperBound(x.data(), i, s.hi + kOffset);
+  }
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = options.max_iterations;
+  so.function_tolerance = 1e-10;
+  so.parameter_tolerance = 1e-8;
+  so.gradient_tolerance = 1e-14;
+  so.logging_type = ceres::SILENT;
+  so.minimizer_progress_to_stdout = false;
+  so.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &cp, &summary);
+  std::vector<double> theta(k);
+  for (int i = 0; i < k; ++i) theta[i] = x[i] - kOffset;
+  const double at_end = problem->Objective(set, theta);
+  const double at_start = problem->Objective(set, start);
+  return Assess(problem, set, at_start < at_end ? start : theta, options);
+}
+
+}  // namespace ema::diagnose::detail

@@ -1,0 +1,339 @@
+// Missing-effect diagnosis on "test" modes made from the model plus one known effect plus noise.
+//
+// The model is a small aerostatic-guideway-like article built in code: a carriage floating on
+// air-film pads (series chains with an air film, operated by a stud setting) over a base plate
+// that sits on linear mounts. Test data = the model with a known effect, solved, with 0.1 %
+// (1σ) noise on every frequency and 1 % of the RMS amplitude on every shape value (complex),
+// from fixed seeds: the accuracy of a good hammer test. Tolerances: fitted parameter within 5 %
+// of the truth (issue 7); with this noise the fits land within about 1 %.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "ema/core/error.hpp"
+#include "ema/diagnose/diagnose.hpp"
+#include "ema/model/effects.hpp"
+#include "ema/model/solve.hpp"
+
+namespace ema::diagnose {
+namespace {
+
+using model::Anchor;
+using model::Effect;
+using model::Law;
+using model::LinearLaw;
+using model::Model;
+using model::Spring;
+
+// Load-lift curve W(h) of one pad: exponential (vertical pads) or inverse-square (lateral pads),
+// so a change of gap changes vertical and lateral stiffness in different ratios.
+model::AirFilmLaw Film(bool exponential, double scale) {
+  model::AirFilmLaw film;
+  for (int i = 0; i <= 80; ++i) {
+    const double h = (0.5 + 0.75 * i) * 1e-6;
+    film.gap.push_back(h);
+    film.load.push_back(exponential ? scale * 300.0 * std::exp(-h / 6e-6) : scale * 80.0 * std::pow(5e-6 / h, 2.0));
+  }
+  film.operating_gap = 5e-6;
+  return film;
+}
+
+Law FilmChain(bool exponential, double scale, double setting) {
+  model::SeriesLaw chain;
+  chain.elements.push_back(Law(Film(exponential, scale)));
+  chain.setting = setting;
+  return Law(chain);
+}
+
+Spring MakeSpring(const std::string& name, const std::string& group, const std::string& a, const std::string& b,
+                  Eigen::Vector3d at, Eigen::Vector3d dir, Law law) {
+  Spring s;
+  s.name = name;
+  s.group = group;
+  s.a = Anchor{a, 0, at, true};
+  s.b = Anchor{b, 0, at, true};
+  s.direction = dir;
+  s.law = std::move(law);
+  return s;
+}
+
+// lateral_group: the group of the lateral pads ("bearings" mixes pad kinds; another name leaves
+// the "bearings" group with four identical vertical pads).
+Model Guideway(const std::string& lateral_group = "bearings") {
+  Model m;
+  m.name = "test guideway";
+  m.origin = "guideway (built in code)";
+  model::Body carriage{"carriage", 2.88, {0.0117763, 0.0151621, 0.0104617}, Eigen::Vector3d::Zero(),
+                       Eigen::Vector3d::Zero(), 0};
+  model::Body base{"base", 12.0, {0.08, 0.10, 0.15}, Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, -0.08), 0};
+  m.bodies = {carriage, base};
+  int n = 0;
+  for (double x : {-0.06, 0.06})
+    for (double y : {-0.03, 0.03})
+      m.springs.push_back(MakeSpring("V" + std::to_string(++n), "bearings", "carriage", "base", {x, y, -0.03},
+                                     Eigen::Vector3d::UnitZ(), FilmChain(true, 1.0, 5e-6)));
+  for (double x : {-0.06, 0.06})
+    for (double y : {-0.045, 0.045})
+      m.springs.push_back(MakeSpring("L" + std::to_string(++n), lateral_group, "carriage", "base", {x, y, 0.0},
+                                     Eigen::Vector3d(0, y > 0 ? -1.0 : 1.0, 0), FilmChain(false, 1.0, 5e-6)));
+  m.springs.push_back(
+      MakeSpring("drive", "drive", "carriage", "base", {0, 0, 0}, Eigen::Vector3d::UnitX(), Law(LinearLaw{3e6})));
+  for (double x : {-0.1, 0.1})
+    for (double y : {-0.08, 0.08}) {
+      m.springs.push_back(MakeSpring("MZ" + std::to_string(++n), "mounts", "base", model::kGround, {x, y, -0.1},
+                                     Eigen::Vector3d::UnitZ(), Law(LinearLaw{8e6})));
+      m.springs.push_back(MakeSpring("MX" + std::to_string(n), "mounts", "base", model::kGround, {x, y, -0.1},
+                                     Eigen::Vector3d::UnitX(), Law(LinearLaw{2e6 + 1e6 * (x > 0)})));
+      m.springs.push_back(MakeSpring("MY" + std::to_string(n), "mounts", "base", model::kGround, {x, y, -0.1},
+                                     Eigen::Vector3d::UnitY(), Law(LinearLaw{3e6})));
+    }
+  int id = 101;
+  for (double x : {-0.06, 0.06})
+    for (double y : {-0.03, 0.03}) m.points.push_back({id++, Anchor{"carriage", 0, {x, y, 0.03}, true}, 0});
+  id = 201;
+  for (double x : {-0.1, 0.1})
+    for (double y : {-0.08, 0.08}) m.points.push_back({id++, Anchor{"base", 0, {x, y, -0.06}, true}, 0});
+  m.damping.ratio = 0.01;
+  m.setups = {{"stud-5um", {{"bearings", 5e-6}}, 0}, {"stud-9um", {{"bearings", 9e-6}}, 0}};
+  return m;
+}
+
+// The "test": truth model solved, noise on frequencies and shapes (fixed seed).
+ModeSet NoisyTest(const Model& truth, const std::string& setup, unsigned seed, double frequency_noise = 1e-3,
+                  double shape_noise = 1e-2) {
+  model::SolveOptions so;
+  so.setup = setup;
+  ModeSet modes = model::Solve(truth, so).modes;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  for (Mode& mode : modes.modes) {
+    mode.frequency_hz *= 1.0 + frequency_noise * g(rng);
+    const double rms = std::sqrt(mode.shape.squaredNorm() / mode.shape.size());
+    for (Eigen::Index i = 0; i < mode.shape.size(); ++i)
+      mode.shape(i) += shape_noise * rms * std::complex<double>(g(rng), g(rng));
+    mode.pole = FrequencyAndDampingToPole(mode.frequency_hz, mode.damping_ratio);
+  }
+  modes.source = "synthetic test [" + setup + "]";
+  return modes;
+}
+
+double FittedValue(const Candidate& c, const std::string& name) {
+  for (const FittedParameter& p : c.parameters)
+    if (p.name == name) return p.value;
+  return kNaN;
+}
+
+struct KindCase {
+  Effect truth;
+  std::string parameter;
+  double value;
+  bool two_setups;
+};
+
+class EachKind : public ::testing::TestWithParam<KindCase> {};
+
+TEST_P(EachKind, RanksFirstWithItsParameter) {
+  const KindCase& kc = GetParam();
+  const Model nominal = Guideway();
+  const Model truth = model::ApplyEffect(nominal, kc.truth);
+  std::vector<SetupModes> tests;
+  if (kc.two_setups) {
+    tests.push_back({"stud-5um", NoisyTest(truth, "stud-5um", 1)});
+    tests.push_back({"stud-9um", NoisyTest(truth, "stud-9um", 2)});
+  } else {
+    tests.push_back({"", NoisyTest(truth, "", 3)});
+  }
+  DiagnoseOptions options;
+  options.max_effects = 1;  // singles only: fast, and this test is about the single ranking
+  const Diagnosis d = Diagnose(nominal, tests, options);
+  ASSERT_FALSE(d.candidates.empty());
+  const Candidate& first = d.candidates.front();
+  EXPECT_EQ(first.kind, kc.truth.kind) << d.explanation;
+  EXPECT_EQ(first.target, kc.truth.target) << d.explanation;
+  EXPECT_NEAR(FittedValue(first, kc.parameter) / kc.value, 1.0, 0.05) << d.explanation;
+  // The posterior σ is finite and small: 0.1 % frequency noise on 12 modes pins one parameter
+  // to well under 5 %; the truth lies within 4σ of the fit (σ from the Laplace posterior).
+  const FittedParameter& p = first.parameters.front();
+  ASSERT_TRUE(std::isfinite(p.sigma));
+  EXPECT_LT(p.sigma / p.value, 0.05);
+  EXPECT_LT(std::abs(p.value - kc.value), 4.0 * p.sigma + 0.01 * kc.value);
+  // The true effect explains nearly all of the baseline residual (the rest is the noise).
+  EXPECT_GT(first.explained_pct, 95.0);
+  EXPECT_LT(first.mean_abs_frequency_error_pct, 0.5);
+}
+
+Effect Make(const std::string& kind, const std::string& target, const std::string& key, double value) {
+  Effect e{kind, target, {{key, value}}, std::nullopt, 0};
+  if (kind == "series_compliance") {
+    e.parameters.clear();
+    e.law = Law(LinearLaw{value});
+  }
+  return e;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Diagnose, EachKind,
+    ::testing::Values(KindCase{Make("series_compliance", "bearings", "k", 6.5e6), "k", 6.5e6, true},
+                      KindCase{Make("stiffness_scale", "mounts", "factor", 0.6), "factor", 0.6, false},
+                      KindCase{Make("operating_point", "bearings", "value", 7.5e-6), "value", 7.5e-6, false},
+                      KindCase{Make("added_mass", "all_points", "mass", 0.03), "mass", 0.03, false},
+                      KindCase{Make("mass_scale", "carriage", "factor", 1.3), "factor", 1.3, false},
+                      KindCase{Make("ground_spring", "carriage", "k", 2e6), "k", 2e6, false}),
+    [](const auto& info) { return info.param.truth.kind; });
+
+TEST(Diagnose, NoEffectRanksNoneFirst) {
+  const Model nominal = Guideway();
+  std::vector<SetupModes> tests = {{"stud-5um", NoisyTest(nominal, "stud-5um", 21)},
+                                   {"stud-9um", NoisyTest(nominal, "stud-9um", 22)}};
+  DiagnoseOptions options;
+  const Diagnosis d = Diagnose(nominal, tests, options);
+  EXPECT_EQ(d.candidates.front().kind, "none") << d.explanation;
+  EXPECT_NE(d.explanation.find("No candidate effect"), std::string::npos);
+  // 0.1 % noise at a 0.1 % floor: "none" is clearly the most probable reading.
+  EXPECT_GT(d.candidates.front().probability, 0.5) << d.explanation;
+  double sum = 0.0;
+  for (const Candidate& c : d.candidates) sum += c.probability;
+  EXPECT_NEAR(sum, 1.0, 1e-12);
+}
+
+TEST(Diagnose, TwoSetupsSeparateSeriesComplianceFromStiffnessScale) {
+  // "bearings" = four identical vertical pads: with one setup a series compliance is exactly a
+  // uniform stiffness factor on them; with two stud settings the compliance's share differs
+  // (the film is stiffer at 5 µm than at 9 µm, and the gap shifts by a different amount).
+  const Model nominal = Guideway("lateral");
+  const Effect truth_effect = Make("series_compliance", "bearings", "k", 6.5e6);
+  const Model truth = model::ApplyEffect(nominal, truth_effect);
+  DiagnoseOptions options;
+  options.max_effects = 1;
+
+  const Diagnosis one = Diagnose(nominal, {{"stud-5um", NoisyTest(truth, "stud-5um", 31)}}, options);
+  // One setup: the data cannot separate the readings (equal misfit, flagged as tied with rank 1);
+  // the priors order them (a soft series element is likelier than a factor-4 stiffness error).
+  const Candidate& a = one.candidates[0];
+  EXPECT_EQ(a.kind, "series_compliance") << one.explanation;
+  EXPECT_EQ(a.target, "bearings");
+  bool found = false;
+  for (const Candidate& c : one.candidates)
+    if (c.kind == "stiffness_scale" && c.target == "bearings") {
+      found = true;
+      EXPECT_LT(std::abs(c.cost - a.cost), 1.0);  // same misfit within noise (cost is a χ²)
+    }
+  EXPECT_TRUE(found);
+  EXPECT_NE(std::find(a.tied_with.begin(), a.tied_with.end(), "stiffness_scale of 'bearings'"), a.tied_with.end())
+      << one.explanation;
+
+  const Diagnosis two = Diagnose(
+      nominal, {{"stud-5um", NoisyTest(truth, "stud-5um", 31)}, {"stud-9um", NoisyTest(truth, "stud-9um", 32)}},
+      options);
+  const Candidate& best = two.candidates[0];
+  EXPECT_EQ(best.kind, "series_compliance") << two.explanation;
+  EXPECT_EQ(best.target, "bearings");
+  EXPECT_NEAR(FittedValue(best, "k") / 6.5e6, 1.0, 0.05);
+  // The stiffness scale now pays for not fitting both settings: well behind (> 10 in BIC,
+  // "very strong" evidence).
+  for (const Candidate& c : two.candidates)
+    if (c.kind == "stiffness_scale" && c.target == "bearings") {
+      EXPECT_GT(c.score - best.score, 10.0);
+    }
+  EXPECT_TRUE(best.tied_with.empty()) << two.explanation;
+}
+
+TEST(Diagnose, PairReportedOnlyWhenItBeatsTheBestSingle) {
+  // Truth with two effects: a pair must win; with one effect, no pair may be reported above it.
+  Model nominal = Guideway();
+  nominal.bodies[0].uncertainty = 0.5;  // an unweighed carriage: a 30 % mass error is plausible
+  Model truth = model::ApplyEffect(nominal, Make("mass_scale", "carriage", "factor", 1.3));
+  truth = model::ApplyEffect(truth, Make("stiffness_scale", "mounts", "factor", 0.6));
+  const Diagnosis d = Diagnose(nominal, {{"", NoisyTest(truth, "", 41)}}, DiagnoseOptions{});
+  const Candidate& first = d.candidates.front();
+  ASSERT_EQ(first.effects.size(), 2u) << d.explanation;
+  // Order of effects in a combination: the candidate list's order (spring groups before bodies).
+  EXPECT_EQ(first.kind, "stiffness_scale+mass_scale") << d.explanation;
+  EXPECT_EQ(first.target, "mounts+carriage") << d.explanation;
+  for (const Candidate& c : d.candidates) {
+    if (c.effects.size() != 1) continue;
+    EXPECT_GT(c.score, first.score);
+  }
+  ASSERT_EQ(first.parameters.size(), 2u);
+  // 0.1 % frequency noise: both factors land within 1 %; 5 % is the issue's tolerance.
+  EXPECT_EQ(first.parameters[0].effect_kind, "stiffness_scale");
+  EXPECT_NEAR(first.parameters[0].value, 0.6, 0.05 * 0.6);
+  EXPECT_EQ(first.parameters[1].effect_kind, "mass_scale");
+  EXPECT_NEAR(first.parameters[1].value, 1.3, 0.05 * 1.3);
+  EXPECT_GT(first.probability, 0.5);
+}
+
+TEST(Diagnose, PoorlyMeasuredModeWeighsLess) {
+  // One test mode 3 % off (a badly fitted pole). When the fit says so (its frequency spread is
+  // 3 % of f), that mode's residual is divided by its σ and barely pulls the fit; without the
+  // spread it counts like every other mode and biases the factor.
+  const Model nominal = Guideway();
+  const Model truth = model::ApplyEffect(nominal, Make("stiffness_scale", "mounts", "factor", 0.6));
+  ModeSet test = NoisyTest(truth, "", 61, 2e-4, 1e-2);
+  test.modes[0].frequency_hz *= 1.03;
+  DiagnoseOptions options;
+  options.max_effects = 1;
+  options.members = false;
+  const Diagnosis unweighted = Diagnose(nominal, {{"", test}}, options);
+  test.modes[0].frequency_spread_hz = 0.03 * test.modes[0].frequency_hz;
+  const Diagnosis weighted = Diagnose(nominal, {{"", test}}, options);
+  ASSERT_EQ(weighted.candidates.front().kind, "stiffness_scale") << weighted.explanation;
+  ASSERT_EQ(weighted.candidates.front().target, "mounts") << weighted.explanation;
+  const double with_sigma = FittedValue(weighted.candidates.front(), "factor");
+  // 0.02 % noise on 11 good modes: within 1 % of the truth once the bad mode is down-weighted.
+  EXPECT_NEAR(with_sigma / 0.6, 1.0, 0.01);
+  double without_sigma = kNaN;
+  for (const Candidate& c : unweighted.candidates)
+    if (c.kind == "stiffness_scale" && c.target == "mounts") without_sigma = FittedValue(c, "factor");
+  ASSERT_TRUE(std::isfinite(without_sigma));
+  EXPECT_LT(std::abs(with_sigma - 0.6), std::abs(without_sigma - 0.6));
+}
+
+TEST(DiagnoseOptions, DefaultsAreValidAndBadValuesAreNamed) {
+  std::string why;
+  EXPECT_TRUE(DiagnoseOptions{}.IsValid(&why)) << why;
+  DiagnoseOptions o;
+  o.max_effects = 4;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("max_effects"), std::string::npos) << why;
+  o = DiagnoseOptions{};
+  o.frequency_floor = 0.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("frequency_floor"), std::string::npos) << why;
+  Criterion c = Criterion::kBic;
+  EXPECT_TRUE(StringToCriterion("evidence", &c));
+  EXPECT_EQ(c, Criterion::kEvidence);
+  EXPECT_EQ(CriterionToString(Criterion::kAicc), "aicc");
+  EXPECT_FALSE(StringToCriterion("nonsense", &c));
+  // Diagnose refuses invalid options as a usage error.
+  EXPECT_THROW(Diagnose(Guideway(), {{"", NoisyTest(Guideway(), "", 5)}}, o), UsageError);
+}
+
+TEST(Diagnose, BadInput) {
+  const Model nominal = Guideway();
+  ModeSet test = NoisyTest(nominal, "", 5);
+  // A setup the model lacks.
+  EXPECT_THROW(Diagnose(nominal, {{"stud-7um", test}}), InputError);
+  // Test points the model does not define.
+  ModeSet foreign = test;
+  for (Dof& d : foreign.dofs) d.node += 1000;
+  EXPECT_THROW(Diagnose(nominal, {{"", foreign}}), InputError);
+  // No modes.
+  ModeSet empty = test;
+  empty.modes.clear();
+  EXPECT_THROW(Diagnose(nominal, {{"", empty}}), InputError);
+  // Too few paired modes: one mode only.
+  ModeSet single = test;
+  single.modes.resize(1);
+  try {
+    Diagnose(nominal, {{"", single}});
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("paired"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ema::diagnose
