@@ -25,6 +25,26 @@ void AddHelp(po::options_description* options);
 /// A subcommand that is not built yet: prints so on stderr and returns exit code 2.
 int NotBuiltYet(const std::string& command, const std::string& issue);
 
+/// A path a command reads or writes, with the option that named it (for messages).
+struct PathArg {
+  std::string option;  ///< e.g. "-o", "--json", "input"
+  std::string path;
+};
+
+/// cli.md "Every command: outputs never replace inputs". Throws UsageError (exit 2) naming both
+/// paths when an output resolves to one of the inputs, or two outputs to one file; paths are
+/// compared after resolving `.`/`..`, relative paths and symlinks (and hard links, by file
+/// identity). An input TOML file (model, plan, project) brings the files it names (curves, [fe]
+/// matrices, DOF maps, node lists, the project's model and data); an input folder brings the
+/// files in it. Call at the top of a command, before anything is read or written.
+void RefuseOutputsOverInputs(const std::vector<PathArg>& inputs, const std::vector<PathArg>& outputs);
+
+/// The same, with the paths taken from the parsed options: the values (string or list of
+/// strings) of `input_options` and `output_options` that were given; a `NAME=PATH` input value
+/// (`ema diagnose --test SETUP=MODES.unv`) counts as PATH when NAME=PATH is not itself a file.
+void RefuseOutputsOverInputs(const po::variables_map& vm, const std::vector<std::string>& input_options,
+                             const std::vector<std::string>& output_options);
+
 /// True when stderr is a terminal (progress bars are drawn only then).
 bool StderrIsTerminal();
 

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "amplitude_levels.hpp"
 #include "cli.hpp"
 #include "ema/core/error.hpp"
 #include "ema/correlation/amplitude.hpp"
@@ -18,76 +19,6 @@
 #include "report.hpp"
 
 namespace ema {
-namespace {
-
-using nlohmann::json;
-
-json NumberOrNull(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
-/// σ of each mode from the `ema fit --json` file beside MODES.unv (same stem, .json), when it
-/// holds the same modes (same count, frequencies within 1e-6): `frequency_std_hz` and
-/// `damping_ratio_std` (cli.md, added turn 2). Empty when there is no such file or no σ.
-std::vector<correlation::ModeUncertainty> SidecarUncertainty(const std::filesystem::path& modes_path,
-                                                             const ModeSet& modes) {
-  std::filesystem::path side = modes_path;
-  side.replace_extension(".json");
-  std::error_code ec;
-  if (side == modes_path || !std::filesystem::is_regular_file(side, ec)) return {};
-  json j;
-  try {
-    std::ifstream in(side);
-    j = json::parse(in);
-  } catch (const std::exception&) {
-    return {};
-  }
-  if (!j.is_object() || !j.contains("modes") || !j["modes"].is_array() || j["modes"].size() != modes.modes.size())
-    return {};
-  std::vector<correlation::ModeUncertainty> out;
-  bool any = false;
-  for (std::size_t i = 0; i < modes.modes.size(); ++i) {
-    const json& m = j["modes"][i];
-    if (!m.is_object() || !m.contains("frequency_hz") || !m["frequency_hz"].is_number()) return {};
-    const double f = m["frequency_hz"].get<double>();
-    if (std::abs(f - modes.modes[i].frequency_hz) > 1e-6 * modes.modes[i].frequency_hz) return {};
-    correlation::ModeUncertainty u;
-    if (m.contains("frequency_std_hz") && m["frequency_std_hz"].is_number())
-      u.frequency_std_hz = m["frequency_std_hz"].get<double>(), any = true;
-    if (m.contains("damping_ratio_std") && m["damping_ratio_std"].is_number())
-      u.damping_ratio_std = m["damping_ratio_std"].get<double>(), any = true;
-    out.push_back(u);
-  }
-  return any ? out : std::vector<correlation::ModeUncertainty>{};
-}
-
-/// The JSON of cli.md ("ema amplitude").
-json AmplitudeJson(const correlation::AmplitudeResult& r) {
-  json modes = json::array();
-  for (std::size_t i = 0; i < r.modes.size(); ++i) {
-    const correlation::AmplitudeMode& m = r.modes[i];
-    json levels = json::array();
-    for (const correlation::AmplitudePoint& p : m.points)
-      levels.push_back({{"level", p.level},
-                        {"frequency_hz", p.frequency_hz},
-                        {"damping_ratio", p.damping_ratio},
-                        {"frequency_std_hz", NumberOrNull(p.frequency_std_hz)},
-                        {"damping_ratio_std", NumberOrNull(p.damping_ratio_std)},
-                        {"poles", p.poles}});
-    modes.push_back({{"mode", i + 1},
-                     {"levels", levels},
-                     {"frequency_trend", correlation::FrequencyTrendToString(m.frequency_trend)},
-                     {"frequency_change_pct", m.frequency_change_pct},
-                     {"damping_trend", correlation::DampingTrendToString(m.damping_trend)},
-                     {"damping_ratio_factor", NumberOrNull(m.damping_ratio_factor)},
-                     {"frequency_slope_z", m.frequency_slope_z},
-                     {"frequency_extreme_z", m.frequency_extreme_z},
-                     {"damping_slope_z", m.damping_slope_z},
-                     {"target_level", m.points[static_cast<std::size_t>(m.target_point)].level},
-                     {"reading", m.reading}});
-  }
-  return {{"level_kind", correlation::LevelKindToString(r.level_kind)}, {"levels", r.levels}, {"modes", modes}};
-}
-
-}  // namespace
 
 int RunAmplitude(const std::vector<std::string>& args) {
   namespace po = cli::po;
@@ -125,40 +56,15 @@ int RunAmplitude(const std::vector<std::string>& args) {
   if (level_args.size() < 2)
     throw InputError("ema amplitude", "needs mode sets from at least two levels (--level F=MODES.unv twice or more), got " +
                                           std::to_string(level_args.size()));
-  std::vector<std::pair<double, std::string>> parsed;
-  for (const std::string& a : level_args) {
-    const auto eq = a.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == a.size())
-      throw UsageError("--level expects LEVEL=MODES.unv, got '" + a + "'");
-    double level = 0.0;
-    try {
-      std::size_t used = 0;
-      level = std::stod(a.substr(0, eq), &used);
-      if (used != eq) throw std::invalid_argument(a);
-    } catch (const std::exception&) {
-      throw UsageError("--level: '" + a.substr(0, eq) + "' is not a number");
-    }
-    if (!(level > 0.0) || !std::isfinite(level)) throw UsageError("--level: level must be > 0, got '" + a.substr(0, eq) + "'");
-    parsed.push_back({level, a.substr(eq + 1)});
-  }
   for (const auto& [option, out] : {std::pair<std::string, std::string>{"--json", json_path}, {"--report", report_path}}) {
     if (out.empty()) continue;
     std::error_code ec;
-    for (const auto& [level, path] : parsed)
+    for (const std::string& path : app::AmplitudeLevelFiles(level_args))
       if (std::filesystem::path(out) == std::filesystem::path(path) ||
           (std::filesystem::exists(out, ec) && std::filesystem::equivalent(out, path, ec)))
         throw UsageError(option + " " + out + " names an input file");
   }
-  std::vector<correlation::AmplitudeLevel> levels;
-  for (const auto& [level, path] : parsed) {
-    if (!std::filesystem::exists(path)) throw InputError(path, "mode file not found");
-    correlation::AmplitudeLevel l;
-    l.level = level;
-    l.modes = formats::ReadModeSet(path);
-    l.modes.source = path;
-    l.uncertainty = SidecarUncertainty(path, l.modes);
-    levels.push_back(std::move(l));
-  }
+  std::vector<correlation::AmplitudeLevel> levels = app::ReadAmplitudeLevels(level_args, "--level");
   const correlation::AmplitudeResult r = correlation::AnalyseAmplitude(std::move(levels), kind, ao);
 
   std::cout << r.modes.size() << " mode(s) followed over " << r.levels.size() << " levels ("
@@ -175,14 +81,14 @@ int RunAmplitude(const std::vector<std::string>& args) {
   }
   if (!r.unpaired.empty())
     std::cout << r.unpaired.size() << " mode(s) found at one level only (not followed)\n";
-  if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, AmplitudeJson(r).dump(2) + "\n");
+  if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, app::AmplitudeJson(r).dump(2) + "\n");
   if (!report_path.empty()) {
     report::ReportInput page;
     page.title = "ema amplitude";
     page.subtitle = std::to_string(r.levels.size()) + " levels (" + correlation::LevelKindToString(kind) + ")";
     std::istringstream lines(r.summary);
     for (std::string line; std::getline(lines, line);) page.summary.push_back(line);
-    page.amplitude = AmplitudeJson(r);
+    page.amplitude = app::AmplitudeJson(r);
     formats::WriteTextFileAtomically(report_path, report::RenderHtml(page));
   }
   return 0;

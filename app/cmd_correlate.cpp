@@ -96,6 +96,7 @@ int RunCorrelate(const std::vector<std::string>& args) {
   positional.add("test", 1).add("model", 1);
   po::variables_map vm;
   if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  cli::RefuseOutputsOverInputs(vm, {"test", "model"}, {"json", "table"});
 
   correlation::TableFormat format = correlation::TableFormat::kMarkdown;
   if (!table_path.empty()) {

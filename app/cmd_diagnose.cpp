@@ -7,9 +7,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "amplitude_levels.hpp"
 #include "cli.hpp"
 #include "ema/core/error.hpp"
-#include "ema/correlation/diagnose.hpp"
 #include "ema/diagnose/diagnose.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
@@ -121,7 +121,23 @@ std::string DiagnosisSummary(const diagnose::Diagnosis& d) {
   }
   std::string out = "Diagnosis: ";
   for (size_t i = 0; i < parts.size(); ++i) out += (i ? " + " : "") + parts[i];
-  return out + " (probability " + p + ").";
+  out += " (probability " + std::string(p) + ").";
+  // Rank 1 may share its probability with near-equal variants (another point, another member):
+  // how sure each of its effects is, whichever candidate holds it.
+  if (first.probability < 0.9) {
+    for (const auto& e : first.effects) {
+      const auto slash = e.target.find('/');
+      const std::string wildcard = slash != std::string::npos                              ? e.target.substr(0, slash) + "/*"
+                                   : e.target.rfind("points:", 0) == 0 && e.target.find(',') == std::string::npos ? "points:*"
+                                                                                          : e.target;
+      for (const auto& ep : d.effect_probabilities)
+        if (ep.kind == e.kind && ep.target == wildcard) {
+          std::snprintf(p, sizeof p, "%.1f %%", 100.0 * ep.probability);
+          out += "\n  " + e.kind + " on " + wildcard + ": " + p + " over all candidates";
+        }
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -167,6 +183,7 @@ int RunDiagnose(const std::vector<std::string>& args) {
               << diagnose::PriorDefaultsText();
     return 0;
   }
+  cli::RefuseOutputsOverInputs(vm, {"model", "test", "force-level"}, {"json", "output"});
   if (!diagnose::StringToCriterion(criterion, &dopt.criterion))
     throw UsageError("--criterion must be evidence, bic or aicc, got '" + criterion + "'");
   if (no_pairs) dopt.max_effects = 1;
@@ -207,6 +224,9 @@ int RunDiagnose(const std::vector<std::string>& args) {
   out["model_solves"] = d.model_solves;
   out["candidates_screened"] = d.candidates_screened;
   out["explanation"] = d.explanation;
+  out["effect_probabilities"] = json::array();
+  for (const auto& e : d.effect_probabilities)
+    out["effect_probabilities"].push_back({{"kind", e.kind}, {"target", e.target}, {"probability", e.probability}});
   out["steps"] = json::array();
   for (const auto& st : d.steps)
     out["steps"].push_back({{"added", st.added},
@@ -250,33 +270,18 @@ int RunDiagnose(const std::vector<std::string>& args) {
   out["modes"] = mode_rows;
 
   if (!force_levels.empty()) {
-    std::vector<correlation::ForceLevelModes> levels;
-    for (const std::string& level : force_levels) {
-      const auto eq = level.find('=');
-      if (eq == std::string::npos) throw UsageError("--force-level expects FORCE_N=MODES.unv, got '" + level + "'");
-      double force = 0.0;
-      try {
-        force = std::stod(level.substr(0, eq));
-      } catch (const std::exception&) {
-        throw UsageError("--force-level: '" + level.substr(0, eq) + "' is not a force in N");
-      }
-      ModeSet modes = formats::ReadModeSet(level.substr(eq + 1));
-      if (modes.source.empty()) modes.source = level.substr(eq + 1);
-      levels.push_back({force, std::move(modes)});
-    }
-    const correlation::NonlinearityReport nl = correlation::DetectAmplitudeDependence(levels);
-    json modes = json::array();
-    for (const auto& t : nl.modes)
-      modes.push_back({{"reference_mode", t.reference_mode + 1},
-                       {"force_n", t.force_n},
-                       {"frequency_hz", t.frequency_hz},
-                       {"change_pct", t.change_pct},
-                       {"slope_pct_per_decade", t.slope_pct_per_decade},
-                       {"threshold_pct", t.threshold_pct},
-                       {"flagged", t.flagged},
-                       {"trend", t.trend}});
-    out["nonlinearity"] = {{"flagged", nl.any_flagged}, {"summary", nl.summary}, {"modes", modes}};
-    std::cout << "\n" << nl.summary << "\n";
+    // The same analysis as `ema amplitude` (docs/amplitude.md): levels are peak forces here.
+    const correlation::AmplitudeResult amplitude = correlation::AnalyseAmplitude(
+        app::ReadAmplitudeLevels(force_levels, "--force-level"), correlation::LevelKind::kPeakForce);
+    json nonlinearity = app::AmplitudeJson(amplitude);
+    bool flagged = false;
+    for (const auto& m : amplitude.modes)
+      flagged = flagged || m.frequency_trend != correlation::FrequencyTrend::kNone ||
+                m.damping_trend != correlation::DampingTrend::kNone;
+    nonlinearity["flagged"] = flagged;
+    nonlinearity["summary"] = amplitude.summary;
+    out["nonlinearity"] = nonlinearity;
+    std::cout << "\n" << amplitude.summary << "\n";
   }
 
   if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, out.dump(2) + "\n");

@@ -163,6 +163,16 @@ nlohmann::json StabilisationJson(const curvefit::FitResult& fit, const curvefit:
 
 }  // namespace
 
+// Why a fit found no mode (exit 1, nothing written): said in terms of the options to change.
+static std::string NoModeReason(const curvefit::FitResult& fit, const curvefit::FitOptions& options, const std::string& select) {
+  if (options.method == curvefit::FitMethod::kPeak) return "no mode found: no resonance peak in the band (try --band)";
+  const int orders = fit.diagram.order_max;
+  std::string why = "no mode found: no pole stayed stable over the PolyMAX orders " + std::to_string(fit.diagram.order_min) +
+                    ".." + std::to_string(orders);
+  if (orders < 4) why += " (--order-max " + std::to_string(orders) + " is too low: a stable pole must repeat over several orders)";
+  return why + "; try a higher --order-max, another --band" + (select == "auto" ? " or --select F1,F2,..." : "");
+}
+
 int RunFit(const std::vector<std::string>& args) {
   namespace po = cli::po;
   const std::string usage =
@@ -195,6 +205,7 @@ int RunFit(const std::vector<std::string>& args) {
   positional.add("input", 1);
   po::variables_map vm;
   if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  cli::RefuseOutputsOverInputs(vm, {"input"}, {"output", "json", "stabilisation", "plot"});
 
   if (!curvefit::StringToRefineMethod(refine, &fit_options.refine))
     throw UsageError("--refine: expected ml or none, got '" + refine + "'");
@@ -240,6 +251,7 @@ int RunFit(const std::vector<std::string>& args) {
     throw InputError(input, what);
   }
   for (const auto& w : fit.warnings) std::cerr << "warning: " << w << "\n";
+  if (fit.modes.modes.empty()) throw InputError(input, NoModeReason(fit, fit_options, select));
 
   fit.modes.source = input;
   if (fit.modes.modes.empty()) {

@@ -253,6 +253,7 @@ int RunFrf(const std::vector<std::string>& args) {
   positional.add("input", -1);
   po::variables_map vm;
   if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  cli::RefuseOutputsOverInputs(vm, {"input"}, {"output", "json"});
 
   try {
     opt.estimator = frf::ParseEstimator(estimator);

@@ -78,6 +78,7 @@ int RunInfo(const std::vector<std::string>& args) {
   positional.add("file", 1);
   po::variables_map vm;
   if (!cli::Parse(args, "ema info FILE [--json OUT]", options, positional, &vm)) return 0;
+  cli::RefuseOutputsOverInputs(vm, {"file"}, {"json"});
   const formats::FileSummary summary = formats::SummarizeFile(vm["file"].as<std::string>());
   std::cout << formats::SummaryText(summary);
   if (vm.count("json")) formats::WriteTextFileAtomically(vm["json"].as<std::string>(), ToJson(summary).dump(2) + "\n");

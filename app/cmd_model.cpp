@@ -32,6 +32,7 @@ int RunModel(const std::vector<std::string>& args) {
   const std::string usage =
       "ema model MODEL.toml [--setup NAME] -o MODEL_MODES.unv [--json MODEL_MODES.json] [--explain]";
   if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  cli::RefuseOutputsOverInputs(vm, {"model"}, {"output", "json"});
   if (max_modes < 0) throw UsageError("--max-modes must be >= 0");
 
   const model::Model m = formats::ReadModelFile(model_path);
@@ -39,6 +40,7 @@ int RunModel(const std::vector<std::string>& args) {
   solve_options.setup = setup;
   solve_options.max_modes = max_modes;
   const model::Solution sol = model::Solve(m, solve_options);
+  for (const std::string& w : sol.warnings) std::cerr << "ema model: warning: " << w << "\n";
   if (m.points.empty())
     std::cerr << "ema model: warning: " << model_path << " has no [[point]]: mode shapes are written without DOFs\n";
 

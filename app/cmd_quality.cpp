@@ -40,6 +40,7 @@ int RunQuality(const std::vector<std::string>& args) {
   positional.add("input", -1);
   po::variables_map vm;
   if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  cli::RefuseOutputsOverInputs(vm, {"input", "modes"}, {"json"});
   if (!band.empty()) {
     const auto colon = band.find(':');
     try {

@@ -171,6 +171,24 @@ struct TestFiles {
         corr_after_table(d / "correlation-after.md") {}
 };
 
+// Every file `ema run` writes (docs/project-file.md), for cli.md's "outputs never replace inputs".
+std::vector<cli::PathArg> RunOutputs(const fs::path& out, const app::Project& project) {
+  std::vector<cli::PathArg> o = {{"-o", out.string()}};
+  auto add = [&](const fs::path& p) { o.push_back({"-o", p.string()}); };
+  for (const char* name : {"diagnosis.json", "updated-model.toml", "report.html", "summary.txt"}) add(out / name);
+  add(out / "logs" / "diagnose.txt");
+  for (const app::ProjectTest& test : project.tests) {
+    const TestFiles f(out / test.name);
+    for (const fs::path& p : {f.modes, f.modes_json, f.stabilisation, f.model_before, f.model_before_json, f.corr_before,
+                              f.corr_before_table, f.model_after, f.model_after_json, f.corr_after, f.corr_after_table})
+      add(p);
+    if (!test.frf) add(f.frf), add(f.frf_json);
+    for (const char* step : {"-frf", "-fit", "-model-before", "-correlate-before", "-model-after", "-correlate-after"})
+      add(out / "logs" / (test.name + step + ".txt"));
+  }
+  return o;
+}
+
 std::string Stamp() {
   const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   char text[64];
@@ -195,6 +213,7 @@ int RunRun(const std::vector<std::string>& args) {
 
   const app::Project project = app::ReadProjectFile(vm["project"].as<std::string>());
   const fs::path out = vm["output"].as<std::string>();
+  cli::RefuseOutputsOverInputs({{"", project.file.string()}}, RunOutputs(out, project));
   std::error_code ec;
   fs::create_directories(out / "logs", ec);
   if (ec) throw InputError(out.string(), "cannot create the output folder: " + ec.message());

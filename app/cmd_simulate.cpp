@@ -69,7 +69,7 @@ class PlanReader : public formats::TomlFields {
     std::string rest = text->substr(i);
     while (!rest.empty() && (rest.front() == ':' || rest.front() == ' ')) rest.erase(rest.begin());
     const int dir = ParseDirection(rest);
-    if (i == 0 || dir == 0 || std::abs(dir) > 3)
+    if (i == 0 || i > 9 || dir == 0 || std::abs(dir) > 3)  // node ids up to 9 digits (int)
       throw InputError(At(n), "key '" + key + "': '" + *text + "' is not a DOF such as \"101+Z\" (node, +X/-X/+Y/-Y/+Z/-Z)");
     return {std::stoi(text->substr(0, i)), dir};
   }
@@ -174,7 +174,7 @@ class PlanReader : public formats::TomlFields {
         for (const auto& [k, v] : *m) {
           const std::string key(k.str());
           if (!v.is_number()) throw InputError(At(v), "[[set]] masses: expected a number for point " + key);
-          const bool digits = !key.empty() && key.find_first_not_of("0123456789") == std::string::npos;
+          const bool digits = !key.empty() && key.size() <= 9 && key.find_first_not_of("0123456789") == std::string::npos;
           if (!digits) throw InputError(At(v), "[[set]] masses: key '" + key + "' is not a test point id");
           set.masses[std::stoi(key)] = *v.value<double>();
         }
@@ -370,8 +370,10 @@ int RunSimulate(const std::vector<std::string>& args) {
   if (!cli::Parse(args, "ema simulate MODEL.toml --plan PLAN.toml -o TIME.unv [--setup NAME] [--binary]", options,
                   positional, &vm))
     return 0;
+  cli::RefuseOutputsOverInputs(vm, {"model", "plan"}, {"output"});
   const model::Model m = formats::ReadModelFile(model_path);
-  if (!std::filesystem::exists(plan_path)) throw InputError(plan_path, "plan file not found");
+  std::error_code exists_ec;
+  if (!std::filesystem::exists(plan_path, exists_ec)) throw InputError(plan_path, "plan file not found");
   Plan plan = PlanReader(plan_path).Read();
   if (!setup.empty()) plan.setup = setup;
 

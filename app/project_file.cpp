@@ -37,7 +37,8 @@ fs::path Resolve(const fs::path& file, const std::string& relative) {
 
 fs::path ExistingFile(const fs::path& file, const toml::node& node, const std::string& key) {
   const fs::path p = Resolve(file, String(file, node, key));
-  if (!fs::is_regular_file(p)) throw InputError(Where(file, node), "'" + key + "': no such file " + p.string());
+  std::error_code ec;  // an unusable name (too long, ...) is "no such file", not a filesystem_error
+  if (!fs::is_regular_file(p, ec)) throw InputError(Where(file, node), "'" + key + "': no such file " + p.string());
   return p;
 }
 
@@ -53,7 +54,8 @@ std::vector<std::string> Strings(const fs::path& file, const toml::node& node, c
 }  // namespace
 
 Project ReadProjectFile(const fs::path& path) {
-  if (!fs::is_regular_file(path)) throw InputError(path.string(), "no such project file");
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError(path.string(), "no such project file");
   toml::table root;
   try {
     root = toml::parse_file(path.string());

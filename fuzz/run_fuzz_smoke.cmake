@@ -1,36 +1,95 @@
-# ctest formats/fuzz_smoke: build the fuzzer with clang if needed, seed a corpus from the shared
-# UFF files (small ones; big files slow libFuzzer down) and run it for SECONDS seconds.
-if(CLANGXX)  # rebuilt every run so the fuzzer always tests the current sources
-  get_filename_component(out_dir "${FUZZ_EXE}" DIRECTORY)
-  file(MAKE_DIRECTORY "${out_dir}")
-  execute_process(
-    COMMAND "${CLANGXX}" -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined
-            -I${SOURCE_DIR}/formats/include -I${SOURCE_DIR}/core/include
-            ${SOURCE_DIR}/fuzz/uff_reader_fuzz.cpp
-            ${SOURCE_DIR}/formats/src/uff_reader.cpp ${SOURCE_DIR}/formats/src/uff_datasets.cpp
-            ${SOURCE_DIR}/formats/src/uff_writer.cpp ${SOURCE_DIR}/formats/src/atomic_file.cpp
-            -o "${FUZZ_EXE}"
-    RESULT_VARIABLE rc)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "building the fuzzer with ${CLANGXX} failed (${rc})")
-  endif()
-endif()
+# ctest fuzz/<FUZZ_TARGET>: seed a corpus from the project's samples, tests/badinput and
+# ../shared/data (small files only: big ones slow libFuzzer down), then run FUZZ_EXE for SECONDS
+# seconds. Multi-file seeds (a model with its curve and matrices, a project with its model and
+# data) are joined with the separator line of fuzz/fuzz_util.hpp.
+set(sep "\n--8<--\n")
 set(corpus "${WORK_DIR}/corpus")
+file(REMOVE_RECURSE "${corpus}")
 file(MAKE_DIRECTORY "${corpus}")
-file(GLOB_RECURSE seeds "${CORPUS_DIR}/*")
-foreach(seed ${seeds})
-  file(SIZE "${seed}" size)
-  if(size LESS 65536)
-    get_filename_component(name "${seed}" NAME)
-    string(MAKE_C_IDENTIFIER "${name}" id)
-    configure_file("${seed}" "${corpus}/seed_${id}" COPYONLY)
+set(bad "${SOURCE_DIR}/tests/badinput")
+
+function(add_seed name content)
+  string(MAKE_C_IDENTIFIER "${name}" id)
+  file(WRITE "${corpus}/seed_${id}" "${content}")
+endfunction()
+function(add_seed_files)
+  foreach(f ${ARGN})
+    if(IS_DIRECTORY "${f}")
+      continue()
+    endif()
+    file(SIZE "${f}" size)
+    if(size LESS 65536)
+      file(RELATIVE_PATH rel "${SOURCE_DIR}/.." "${f}")
+      string(MAKE_C_IDENTIFIER "${rel}" id)
+      configure_file("${f}" "${corpus}/seed_${id}" COPYONLY)
+    endif()
+  endforeach()
+endfunction()
+function(read_or_empty var path)
+  if(EXISTS "${path}")
+    file(READ "${path}" text)
+  else()
+    set(text "")
   endif()
-endforeach()
+  set(${var} "${text}" PARENT_SCOPE)
+endfunction()
+
+if(FUZZ_TARGET STREQUAL "uff_reader")
+  file(GLOB_RECURSE seeds "${SHARED_DATA_DIR}/uff/*" "${SOURCE_DIR}/samples/uff/*.unv" "${bad}/*.unv")
+  add_seed_files(${seeds})
+elseif(FUZZ_TARGET STREQUAL "csv")
+  file(GLOB seeds "${bad}/*.csv" "${SOURCE_DIR}/samples/meas-point/*.txt" "${SHARED_DATA_DIR}/frf-meas-point/*.txt")
+  add_seed_files(${seeds})
+  add_seed(impact_column "impact,time,force:3:+Z[N],acc:101:+X[m/s^2],acc:102:-Y[g]\n1,0,0.5,0.1,0\n1,0.001,1.5,-0.2,0.1\n2,0,0.25,0.3,0.2\n2,0.001,0.1,0.2,0.1\n")
+  add_seed(complex_column "# re+imj\n(1+2j)\n3.5-0.25j\nnan\n-1e-3\n")
+elseif(FUZZ_TARGET STREQUAL "matrix_market")
+  file(GLOB_RECURSE seeds "${bad}/*.mtx")
+  add_seed_files(${seeds})
+  add_seed(general "%%MatrixMarket matrix coordinate real general\n% comment\n2 2 3\n1 1 4.0\n1 2 -1.0\n2 1 -1.0\n")
+elseif(FUZZ_TARGET STREQUAL "model_file")
+  # Single-file models, and each [fe] case as model + curve + M + K + DOF map.
+  file(GLOB seeds "${bad}/*.toml" "${SOURCE_DIR}/samples/guideway/model.toml" "${SOURCE_DIR}/samples/guideway/truth/model.toml")
+  add_seed_files(${seeds})
+  file(GLOB fe_dirs LIST_DIRECTORIES true "${bad}/fe_*")
+  foreach(d ${fe_dirs})
+    get_filename_component(name "${d}" NAME)
+    read_or_empty(m "${d}/model.toml")
+    read_or_empty(mm "${d}/M.mtx")
+    read_or_empty(kk "${d}/K.mtx")
+    read_or_empty(dofs "${d}/dofs.csv")
+    add_seed("${name}" "${m}${sep}${sep}${mm}${sep}${kk}${sep}${dofs}${sep}node,x,y,z\n1,0,0,0\n2,1,0,0\n3,2,0,0\n")
+  endforeach()
+  read_or_empty(carriage "${SOURCE_DIR}/tests/model/data/carriage.toml")
+  read_or_empty(film "${SOURCE_DIR}/tests/model/data/film25.csv")
+  string(REPLACE "film25.csv" "a.csv" carriage "${carriage}")
+  add_seed(carriage "${carriage}${sep}${film}")
+elseif(FUZZ_TARGET STREQUAL "project_file")
+  read_or_empty(project "${SOURCE_DIR}/samples/guideway/project.toml")
+  read_or_empty(model "${SOURCE_DIR}/samples/guideway/model.toml")
+  read_or_empty(time "${bad}/zero_force.unv")
+  string(REGEX REPLACE "data/stud-[59]um.unv" "t.unv" project "${project}")
+  add_seed(guideway "${project}${sep}${model}${sep}${time}")
+  foreach(d project_missing_data project_unknown_key)
+    read_or_empty(p "${bad}/${d}/project.toml")
+    read_or_empty(m "${bad}/${d}/model.toml")
+    add_seed("${d}" "${p}${sep}${m}${sep}${time}")
+  endforeach()
+elseif(FUZZ_TARGET STREQUAL "plan_file")
+  file(GLOB seeds "${SOURCE_DIR}/samples/guideway/truth/plan-*.toml" "${SOURCE_DIR}/tests/model/data/plan.toml"
+                  "${bad}/plan_*/plan.toml")
+  add_seed_files(${seeds})
+else()
+  message(FATAL_ERROR "unknown fuzz target ${FUZZ_TARGET}")
+endif()
+
+file(GLOB seeds "${corpus}/*")
+list(LENGTH seeds count)
+message(STATUS "fuzz ${FUZZ_TARGET}: ${count} seeds, ${SECONDS} s")
 execute_process(
   COMMAND "${FUZZ_EXE}" -max_total_time=${SECONDS} -max_len=65536 -timeout=10 -rss_limit_mb=2048
           -print_final_stats=1 "${corpus}"
   WORKING_DIRECTORY "${WORK_DIR}"
   RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "the UFF fuzzer found a problem (exit ${rc}); the reproducer crash-* is in ${WORK_DIR}")
+  message(FATAL_ERROR "the ${FUZZ_TARGET} fuzzer found a problem (exit ${rc}); the reproducer crash-* is in ${WORK_DIR}")
 endif()

@@ -162,6 +162,11 @@ HammerTest AssembleHammerTest(std::vector<RecordSet> sets) {
       throw InputError(test.records[imp.force].origin, "force record of impact " + std::to_string(imp.number) +
                                                            " at reference " + DofName(imp.reference) +
                                                            " has no response record");
+    const std::vector<double>& force = test.records[imp.force].samples;
+    if (std::all_of(force.begin(), force.end(), [](double v) { return v == 0.0; }))
+      throw InputError(test.records[imp.force].origin,
+                       "force record of impact " + std::to_string(imp.number) + " at reference " + DofName(imp.reference) +
+                           " is all zeros: expected a hammer pulse (is the force channel connected, its sensitivity set?)");
     AddUnique(&test.references, imp.reference);
     for (int i : imp.responses) AddUnique(&test.outputs, test.records[i].channel);
   }

@@ -177,6 +177,7 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
   detail::Rank(&all, none);
   for (const Candidate& c : all)
     if (c.kind == "none") result.baseline = c;
+  result.effect_probabilities = EffectProbabilities(all);
 
   // Stage 6: explanation, and the error falling as rank 1's effects are added.
   result.explanation = detail::Explain(all, result.baseline);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "internal.hpp"
@@ -189,6 +190,15 @@ std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
   if (!first.tied_with.empty())
     words << " The data alone cannot tell it apart from " << Join(first.tied_with, ", ")
           << " (the priors order them): more modes, shapes or another setup would.";
+  if (first.probability < 0.9) {
+    // Near-equal candidates share the probability: say how sure each effect is, whichever holds it.
+    std::vector<std::string> parts;
+    for (const EffectProbability& e : EffectProbabilities(all)) {
+      if (parts.size() == 3) break;
+      parts.push_back(e.kind + " on " + e.target + " " + prob(e.probability));
+    }
+    if (!parts.empty()) words << " Summed over the candidates that hold it: " << Join(parts, ", ") << ".";
+  }
   return words.str();
 }
 
@@ -196,6 +206,29 @@ std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
 
 using detail::FormatNumber;
 using detail::Join;
+
+std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>& ranked) {
+  std::map<std::pair<std::string, std::string>, double> sums;
+  for (const Candidate& c : ranked) {
+    if (!c.error.empty() || !(c.probability > 0.0)) continue;
+    // Each key counts a candidate once, even when it holds two members of one group.
+    std::set<std::pair<std::string, std::string>> keys;
+    for (const model::Effect& e : c.effects) {
+      keys.insert({e.kind, e.target});
+      const auto slash = e.target.find('/');
+      if (slash != std::string::npos) keys.insert({e.kind, e.target.substr(0, slash) + "/*"});
+      if (e.target.rfind("points:", 0) == 0 && e.target.find(',') == std::string::npos) keys.insert({e.kind, "points:*"});
+    }
+    for (const auto& k : keys) sums[k] += c.probability;
+  }
+  std::vector<EffectProbability> out;
+  for (const auto& [key, p] : sums)
+    if (p >= 0.01) out.push_back({key.first, key.second, std::min(1.0, p)});
+  std::stable_sort(out.begin(), out.end(), [](const EffectProbability& a, const EffectProbability& b) {
+    return a.probability > b.probability;
+  });
+  return out;
+}
 
 std::string DescribeCandidate(const Candidate& c) {
   if (c.effects.empty()) return "no missing effect";

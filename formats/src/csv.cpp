@@ -10,6 +10,7 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
+#include "text_lines.hpp"
 
 namespace ema::formats {
 
@@ -84,6 +85,18 @@ Column ParseHeader(const std::string& raw, const std::string& where) {
     throw InputError(where, "column '" + raw + "': unknown role '" + parts[0] + "' (force, acc, vel or disp)");
   c.quantity = it->second.first;
   c.unit = unit.empty() ? it->second.second : unit;
+  // The unit is a label (never converted), but one of another quantity is a wrong column.
+  static const std::map<Quantity, std::vector<std::string>> kUnits = {
+      {Quantity::kForce, {"N", "kN", "lbf"}},
+      {Quantity::kAcceleration, {"m/s^2", "m/s2", "m/s/s", "mm/s^2", "g", "in/s^2"}},
+      {Quantity::kVelocity, {"m/s", "mm/s", "in/s"}},
+      {Quantity::kDisplacement, {"m", "mm", "um", "in"}}};
+  const auto& units = kUnits.at(c.quantity);
+  if (std::find(units.begin(), units.end(), c.unit) == units.end()) {
+    std::string list;
+    for (const auto& u : units) list += (list.empty() ? "" : ", ") + u;
+    throw InputError(where, "column '" + raw + "': '" + c.unit + "' is not a unit of " + parts[0] + " (expected " + list + ")");
+  }
   std::int64_t node = 0;
   if (!uff::ParseInteger(parts[1], &node) || node <= 0 || node > 2147483647)
     throw InputError(where, "column '" + raw + "': node must be a positive integer, found '" + parts[1] + "'");
@@ -128,7 +141,7 @@ std::vector<TimeRecord> ReadCsvTimeRecords(const std::filesystem::path& path) {
   std::vector<Column> cols;
   char sep = ',';
   std::int64_t header_line = 0;
-  while (std::getline(in, line)) {
+  while (ReadTextLine(in, &line, file, line_no + 1)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (TrimCopy(line).empty() || line[0] == '#') continue;
@@ -169,7 +182,7 @@ std::vector<TimeRecord> ReadCsvTimeRecords(const std::filesystem::path& path) {
   std::vector<Group> groups;
   std::map<int, size_t> group_of;
   const int default_impact = ImpactFromFileName(path);
-  while (std::getline(in, line)) {
+  while (ReadTextLine(in, &line, file, line_no + 1)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (TrimCopy(line).empty() || line[0] == '#') continue;

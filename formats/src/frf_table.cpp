@@ -11,6 +11,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
+#include "text_lines.hpp"
 
 namespace ema::formats {
 
@@ -195,7 +196,7 @@ FrfSet ReadInlineTable(const std::filesystem::path& path) {
   std::vector<std::int64_t> lines;
   std::vector<std::vector<std::complex<double>>> values;
   const auto header_hint = "a header such as 'frequency_hz, 1+X/2+X, 1+X/3+X' (response/reference)";
-  while (std::getline(in, line)) {
+  while (ReadTextLine(in, &line, file, line_no + 1)) {
     ++line_no;
     const std::string where = file + ":" + std::to_string(line_no);
     const std::string trimmed = Trim(line);
@@ -294,7 +295,7 @@ FrfSet ReadIndexedFolder(const std::filesystem::path& index) {
   char sep = ',';
   std::string line;
   std::int64_t line_no = 0;
-  while (std::getline(in, line)) {
+  while (ReadTextLine(in, &line, file, line_no + 1)) {
     ++line_no;
     const std::string where = file + ":" + std::to_string(line_no);
     const std::string trimmed = Trim(line);
@@ -359,7 +360,7 @@ Eigen::VectorXcd ReadComplexColumnText(const std::filesystem::path& path) {
   std::vector<std::complex<double>> values;
   std::string line;
   std::int64_t line_no = 0;
-  while (std::getline(in, line)) {
+  while (ReadTextLine(in, &line, path.string(), line_no + 1)) {
     ++line_no;
     const std::string s = Trim(line);
     if (s.empty() || s[0] == '#') continue;

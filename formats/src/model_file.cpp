@@ -15,6 +15,7 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/matrix_market.hpp"
 #include "ema/formats/toml_fields.hpp"
+#include "text_lines.hpp"
 #include "ema/formats/uff.hpp"
 #include "ema/model/air_film.hpp"
 #include "ema/model/effects.hpp"
@@ -28,10 +29,11 @@ using model::Law;
 // Calls `row` with the line number and the fields of every data line of a small CSV file (curve,
 // DOF map, node list): blank and '#' lines skipped, ',' ';' and tabs read as blanks. Header
 // lines are the caller's to recognise, since only it knows what a data row looks like.
-void ForEachCsvRow(std::istream& in, const std::function<void(int line, std::istringstream& fields)>& row) {
+void ForEachCsvRow(std::istream& in, const fs::path& file,
+                   const std::function<void(int line, std::istringstream& fields)>& row) {
   std::string line;
   int no = 0;
-  while (std::getline(in, line)) {
+  while (ReadTextLine(in, &line, file.string(), no + 1)) {
     ++no;
     if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
     for (char& c : line)
@@ -104,7 +106,7 @@ class Reader : public TomlFields {
     const fs::path f = Resolve(String(n, "file"));
     std::ifstream in(f);
     if (!in) throw InputError(At(n), "cannot open curve file '" + f.string() + "'");
-    ForEachCsvRow(in, [&](int no, std::istringstream& s) {
+    ForEachCsvRow(in, f, [&](int no, std::istringstream& s) {
       double a = 0, b = 0;
       if (!(s >> a >> b)) {
         if (x->empty()) return;  // header line(s) before the data
@@ -254,15 +256,20 @@ class Reader : public TomlFields {
     const fs::path dofs = Resolve(String(Require(t, "dofs", "[fe]"), "dofs"));
     for (const char* key : {"mass", "stiffness", "dofs"}) {
       const fs::path f = Resolve(String(*t.get(key), key));
-      if (!fs::exists(f)) throw InputError(At(*t.get(key)), "[fe] " + std::string(key) + ": file '" + f.string() + "' not found");
+      std::error_code ec;  // an unusable name (too long, ...) is "not found", not a filesystem_error
+      if (!fs::exists(f, ec)) throw InputError(At(*t.get(key)), "[fe] " + std::string(key) + ": file '" + f.string() + "' not found");
     }
     m->fe.mass = ReadMatrixMarket(mass);
     m->fe.stiffness = ReadMatrixMarket(stiffness);
+    RequireSymmetric(m->fe.mass, mass);
+    RequireSymmetric(m->fe.stiffness, stiffness);
     m->fe.origin = dofs.string();
+    m->fe.mass_file = mass.string();
+    m->fe.stiffness_file = stiffness.string();
     // DOF map: node,dof per matrix row.
     std::ifstream in(dofs);
     if (!in) throw InputError(At(*t.get("dofs")), "cannot open DOF map '" + dofs.string() + "'");
-    ForEachCsvRow(in, [&](int no, std::istringstream& s) {
+    ForEachCsvRow(in, dofs, [&](int no, std::istringstream& s) {
       long node = 0;
       std::string dof;
       if (!(s >> node >> dof)) {
@@ -305,7 +312,7 @@ class Reader : public TomlFields {
       }
       return;
     }
-    ForEachCsvRow(in, [&](int no, std::istringstream& s) {
+    ForEachCsvRow(in, f, [&](int no, std::istringstream& s) {
       long id;
       double x, y, z;
       if (!(s >> id >> x >> y >> z)) {
@@ -405,6 +412,11 @@ class Reader : public TomlFields {
       } else {
         s.b.body = model::kGround;
       }
+      if (s.a.IsNode() ? s.a.node == s.b.node : (!s.b.IsNode() && s.a.body == s.b.body))
+        throw InputError(At(t.get("b") ? *t.get("b") : t), ctx + ": both ends are on " +
+                                                              (s.a.IsNode() ? "FE node " + std::to_string(s.a.node)
+                                                                            : "'" + s.a.body + "'") +
+                                                              ": expected a spring between two different bodies, nodes or ground");
       const toml::node& dir = Require(t, "direction", ctx);
       if (dir.is_string()) {
         const int code = ParseDirection(String(dir, "direction"));
@@ -485,7 +497,8 @@ std::string Array(const std::vector<double>& v) {
 }  // namespace
 
 model::Model ReadModelFile(const std::filesystem::path& path) {
-  if (!std::filesystem::exists(path)) throw InputError(path.string(), "model file not found");
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path.string(), "model file not found");
   return Reader(path).Read();
 }
 

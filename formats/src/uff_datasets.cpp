@@ -762,7 +762,9 @@ static inline int FastField(const char* p, const char* e, double* out) {
       ++p;
     }
     const char* xs = p;
-    while (p < e && static_cast<unsigned>(*p - '0') < 10u) ex = ex * 10 + (*p++ - '0');
+    // At most 3 exponent digits on this path (longer ones go to ParseReal): accumulating more
+    // would overflow `ex` ("1E9999999999").
+    while (p < e && static_cast<unsigned>(*p - '0') < 10u && p - xs < 4) ex = ex * 10 + (*p++ - '0');
     if (p == xs || p - xs > 3) return -1;
     if (en) ex = -ex;
   }

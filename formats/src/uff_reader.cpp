@@ -318,6 +318,13 @@ bool InputFile::NextLine(std::string_view* line) {
       return true;
     }
     const size_t have = end_ - begin_;
+    // UFF text lines are 80 columns; 58b data is read by byte count, never as a line. A "line" of
+    // megabytes is binary garbage (or a file of NULs): stop here instead of buffering the file.
+    constexpr size_t kMaxLine = size_t{1} << 20;
+    if (have > kMaxLine)
+      throw InputError(name_ + ":" + std::to_string(line_number_ + 1),
+                       "no end of line in the first " + std::to_string(kMaxLine) +
+                           " bytes of this line: expected UFF text lines of 80 columns (binary data?)");
     Fill(have + 1);  // may move the data to the front of the buffer
     scan_from = begin_ + have;
   }

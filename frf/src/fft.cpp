@@ -16,10 +16,23 @@ std::mutex& PlannerMutex() {
   return m;
 }
 
-// Plans live for the whole process (one per length); FFTW plans are read-only once made.
+// Plans live for the whole process (one per length); FFTW plans are read-only once made. The
+// cache owns them: at exit it destroys every plan and lets FFTW free its planner state, so a leak
+// checker sees nothing left (docs/reliability.md).
+struct PlanCache {
+  std::map<int, fftw_plan> plans;
+  PlanCache() = default;
+  PlanCache(const PlanCache&) = delete;
+  PlanCache& operator=(const PlanCache&) = delete;
+  ~PlanCache() {
+    for (auto& [n, plan] : plans) fftw_destroy_plan(plan);
+    fftw_cleanup();
+  }
+};
+
 std::map<int, fftw_plan>& Plans() {
-  static std::map<int, fftw_plan> plans;
-  return plans;
+  static PlanCache cache;
+  return cache.plans;
 }
 
 }  // namespace

@@ -279,12 +279,39 @@ class LdltShiftInvert {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver_;
 };
 
-void CheckMassDiagonal(const System& sys, const std::string& origin) {
+// Where system DOF i comes from, for messages: its body's line in the model file, or the FE
+// matrix file and its diagonal entry.
+std::string DofWhere(const Model& model, const System& sys, int i, bool stiffness) {
+  if (i < sys.body_dof_count) {
+    const std::size_t b = static_cast<std::size_t>(i / 6);
+    return b < model.bodies.size() ? model.Where(model.bodies[b].line) : model.Where(0);
+  }
+  const int r = i - sys.body_dof_count + 1;
+  const std::string& file = stiffness ? model.fe.stiffness_file : model.fe.mass_file;
+  return (file.empty() ? model.fe.origin : file) + ": entry (" + std::to_string(r) + ", " + std::to_string(r) + ")";
+}
+
+void CheckMassDiagonal(const Model& model, const System& sys) {
   const Eigen::VectorXd diag = sys.mass.diagonal();
   for (int i = 0; i < diag.size(); ++i)
     if (!(diag[i] > 0.0))
-      throw InputError(origin, "singular mass matrix: DOF " + sys.dof_names[i] +
-                                   " has no mass or inertia (diagonal entry " + std::to_string(diag[i]) + ")");
+      throw InputError(DofWhere(model, sys, i, false), "singular mass matrix: DOF " + sys.dof_names[i] +
+                                                           " has no mass or inertia (diagonal entry " +
+                                                           std::to_string(diag[i]) + "): expected a mass > 0 and " +
+                                                           "inertia > 0 about every axis");
+}
+
+// The first DOF k at which the Cholesky factorisation of the dense SPD candidate `m` fails: the
+// leading k+1 DOFs are not positive definite. -1 when it succeeds.
+int FirstNonPositivePivot(Eigen::MatrixXd m) {
+  const int n = static_cast<int>(m.rows());
+  for (int k = 0; k < n; ++k) {
+    const double d = m(k, k) - m.row(k).head(k).squaredNorm();
+    if (!(d > 0.0)) return k;
+    m(k, k) = std::sqrt(d);
+    for (int i = k + 1; i < n; ++i) m(i, k) = (m(i, k) - m.row(i).head(k).dot(m.row(k).head(k))) / m(k, k);
+  }
+  return -1;
 }
 
 }  // namespace
@@ -296,7 +323,7 @@ Solution Solve(const Model& input, const SolveOptions& options) {
   System sys = Assemble(model, options);
   const int n = static_cast<int>(sys.mass.rows());
   if (n == 0) throw InputError(origin, "the model has no degrees of freedom (no [[body]] and no [fe])");
-  CheckMassDiagonal(sys, origin);
+  CheckMassDiagonal(model, sys);
 
   Solution sol;
   sol.springs = sys.springs;
@@ -306,9 +333,13 @@ Solution Solve(const Model& input, const SolveOptions& options) {
   if (n < options.sparse_threshold) {
     const Eigen::MatrixXd m(sys.mass), k(sys.stiffness);
     Eigen::LLT<Eigen::MatrixXd> llt(m);
-    if (llt.info() != Eigen::Success)
-      throw InputError(origin, "singular mass matrix: M is not positive definite (a body with zero mass or inertia, "
-                               "or an FE mass matrix that is not positive definite)");
+    if (llt.info() != Eigen::Success) {
+      const int k = std::max(0, FirstNonPositivePivot(m));
+      throw InputError(DofWhere(model, sys, k, false),
+                       "singular mass matrix: M is not positive definite at DOF " + sys.dof_names[k] +
+                           " (a body with zero mass or inertia, products of inertia larger than the inertias, "
+                           "or an FE mass matrix that is not positive definite)");
+    }
     Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(k, m, Eigen::ComputeEigenvectors | Eigen::Ax_lBx);
     if (es.info() != Eigen::Success) throw InputError(origin, "eigenvalue solution failed");
     eigenvalues = es.eigenvalues();
@@ -339,13 +370,22 @@ Solution Solve(const Model& input, const SolveOptions& options) {
   std::vector<int> elastic;
   for (int i = 0; i < eigenvalues.size(); ++i) {
     const double lam = eigenvalues[i];
-    if (lam < -rigid_limit)
-      throw InputError(origin, "negative eigenvalue " + std::to_string(lam) +
-                                   " (rad/s)^2: the stiffness matrix is not positive semi-definite");
+    if (lam < -rigid_limit) {
+      // Name the DOF that moves most in the offending mode (and its FE entry or body line).
+      Eigen::Index k = 0;
+      vectors.col(i).cwiseAbs().maxCoeff(&k);
+      throw InputError(DofWhere(model, sys, static_cast<int>(k), true),
+                       "negative eigenvalue " + std::to_string(lam) +
+                           " (rad/s)^2: the stiffness matrix is not positive semi-definite (the mode moves mostly DOF " +
+                           sys.dof_names[static_cast<std::size_t>(k)] + "); expected a positive semi-definite stiffness");
+    }
     if (lam <= rigid_limit) sol.rigid_body_frequencies_hz.push_back(std::sqrt(std::max(0.0, lam)) / kTwoPi);
     else elastic.push_back(i);
   }
   if (options.max_modes > 0 && static_cast<int>(elastic.size()) > options.max_modes) elastic.resize(options.max_modes);
+  if (elastic.empty())
+    sol.warnings.push_back(origin + ": no elastic mode: all " + std::to_string(sol.rigid_body_frequencies_hz.size()) +
+                           " modes are rigid-body modes (a free model with no spring or support between its parts?)");
 
   sol.full_shapes.resize(n, static_cast<int>(elastic.size()));
   sol.modes.dofs = sys.observed_dofs;

@@ -171,7 +171,7 @@ TEST(AmplitudeChain, RealHammerImpactsOfALinearArticleSplitByForceStayNone) {
   // force bins, fitted and compared: a linear structure over a 1.15x force range, so every mode
   // must come out `none` (the floors are meant for exactly this repeatability).
   const fs::path data = fs::path(EMA_SHARED_DATA_DIR) / "hammer-pyfrf" / "hammer-5-impacts.unv";
-  if (!fs::exists(data)) GTEST_SKIP() << "shared data not found: " << data;
+  if (!fs::exists(data)) FAIL() << "shared data not found: " << data;
   const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / ("amplitude_real_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);

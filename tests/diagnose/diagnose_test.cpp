@@ -335,5 +335,42 @@ TEST(Diagnose, BadInput) {
   }
 }
 
+TEST(EffectProbabilities, SumOverTheCandidatesThatHoldEachEffect) {
+  // Four ranked candidates with probabilities 0.4 / 0.3 / 0.2 / 0.1. By hand:
+  //   series_compliance on bearings: 0.4 + 0.3 + 0.2 = 0.9
+  //   added_mass on points:* (single points): 0.4 + 0.3 = 0.7 (points:1,2 is not a single point)
+  //   stiffness_scale on joints/*: 0.2 + 0.1 = 0.3, with joints/J1 0.2 and joints/J2 0.1 —
+  //   counted once per candidate even where one candidate holds two members (J1 and J2 in #3).
+  auto effect = [](const std::string& kind, const std::string& target) {
+    Effect e;
+    e.kind = kind;
+    e.target = target;
+    return e;
+  };
+  std::vector<Candidate> ranked(4);
+  ranked[0].effects = {effect("series_compliance", "bearings"), effect("added_mass", "points:101")};
+  ranked[1].effects = {effect("series_compliance", "bearings"), effect("added_mass", "points:102")};
+  ranked[2].effects = {effect("series_compliance", "bearings"), effect("stiffness_scale", "joints/J1"),
+                       effect("stiffness_scale", "joints/J2")};
+  ranked[3].effects = {effect("stiffness_scale", "joints/J2"), effect("added_mass", "points:1,2")};
+  const double p[] = {0.4, 0.3, 0.2, 0.1};
+  for (int i = 0; i < 4; ++i) ranked[i].probability = p[i];
+  const std::vector<EffectProbability> out = EffectProbabilities(ranked);
+  auto find = [&](const std::string& kind, const std::string& target) {
+    for (const auto& e : out)
+      if (e.kind == kind && e.target == target) return e.probability;
+    return -1.0;
+  };
+  EXPECT_NEAR(find("series_compliance", "bearings"), 0.9, 1e-12);
+  EXPECT_NEAR(find("added_mass", "points:*"), 0.7, 1e-12);
+  EXPECT_NEAR(find("added_mass", "points:101"), 0.4, 1e-12);
+  EXPECT_NEAR(find("added_mass", "points:1,2"), 0.1, 1e-12);
+  EXPECT_NEAR(find("stiffness_scale", "joints/*"), 0.3, 1e-12);
+  EXPECT_NEAR(find("stiffness_scale", "joints/J1"), 0.2, 1e-12);
+  EXPECT_NEAR(find("stiffness_scale", "joints/J2"), 0.3, 1e-12);
+  ASSERT_FALSE(out.empty());
+  for (size_t i = 1; i < out.size(); ++i) EXPECT_GE(out[i - 1].probability, out[i].probability) << "most probable first";
+}
+
 }  // namespace
 }  // namespace ema::diagnose

@@ -82,6 +82,13 @@ TEST(QualityCli, VerdictsAndNumbersInJson) {
   EXPECT_EQ(RunEmaQuality("quality", dir, &out), 2);
   EXPECT_EQ(RunEmaQuality("quality \"" + (dir / "frf.unv").string() + "\" --reciprocity-tol 0", dir, &out), 2);
   EXPECT_EQ(RunEmaQuality("quality \"" + (dir / "missing.unv").string() + "\"", dir, &out), 1);
+  // The JSON may not replace an input (exit 2, the input untouched).
+  const auto before = fs::file_size(dir / "modes.unv");
+  EXPECT_EQ(RunEmaQuality("quality \"" + (dir / "frf.unv").string() + "\" --modes \"" + (dir / "modes.unv").string() +
+                              "\" --json \"" + (dir / "modes.unv").string() + "\"",
+                          dir, &out),
+            2);
+  EXPECT_EQ(fs::file_size(dir / "modes.unv"), before);
 }
 
 }  // namespace

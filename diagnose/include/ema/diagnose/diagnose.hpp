@@ -126,10 +126,25 @@ struct Step {
   double mean_agreement_pct = kNaN;
 };
 
+/// How sure the diagnosis is of one effect, whichever candidate holds it: the summed probability
+/// of the candidates that contain it. `target` is exact ("bearings", "joints/J3", "points:101")
+/// or, summed over the members of a group or over single points, "joints/*" or "points:*".
+/// Where the data cannot tell which member or point (several near-equal candidates), the
+/// wildcard's probability is the one to read.
+struct EffectProbability {
+  std::string kind;
+  std::string target;
+  double probability = 0.0;
+};
+
+/// The effect probabilities of ranked candidates, most probable first (≥ 1 % only).
+std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>& ranked);
+
 struct Diagnosis {
   Candidate baseline;                 ///< the model as given (also in `candidates` as "none")
   std::vector<Candidate> candidates;  ///< ranked, rank 1 first; includes "none"
   std::vector<Step> steps;            ///< baseline, then rank 1's effects added in turn
+  std::vector<EffectProbability> effect_probabilities;  ///< per effect, most probable first
   std::string explanation;            ///< in words, for the user
   int residual_count = 0;
   int test_mode_count = 0;

@@ -196,6 +196,7 @@ struct FeMatrices {
   std::vector<DofEntry> dofs;                      ///< one per matrix row
   std::map<int, Eigen::Vector3d> node_positions;   ///< node id -> global position, m
   std::string origin;                              ///< file names, for messages
+  std::string mass_file, stiffness_file;           ///< the matrices' files, for messages naming an entry
 
   bool Empty() const { return dofs.empty(); }
 };

@@ -75,6 +75,9 @@ struct Solution {
   Eigen::MatrixXd full_shapes;                    ///< system DOFs x modes, mass-normalised
   std::vector<std::string> dof_names;
   bool sparse = false;                            ///< solved with the sparse shift-invert path
+  /// Usable but suspect results, each naming the model file (e.g. no elastic mode at all: an
+  /// all-free model). `ema model` prints them on stderr as "warning: ...".
+  std::vector<std::string> warnings;
 };
 
 /// Operating point and linearised stiffness of one law. `override_value` (NaN = none) replaces

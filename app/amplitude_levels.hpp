@@ -1,0 +1,25 @@
+// Reading mode sets per excitation level and writing the amplitude analysis as JSON: shared by
+// `ema amplitude` and `ema diagnose --force-level`, so both run the same analysis.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "ema/correlation/amplitude.hpp"
+
+namespace ema::app {
+
+/// Parses `LEVEL=MODES.unv` arguments of `option` (UsageError on a bad form or a level that is
+/// not a positive number) and reads each mode set, with each mode's σ from the `ema fit --json`
+/// file beside it (same stem, .json) when that file holds the same modes.
+std::vector<correlation::AmplitudeLevel> ReadAmplitudeLevels(const std::vector<std::string>& level_args,
+                                                             const std::string& option);
+
+/// The mode files named by `LEVEL=MODES.unv` arguments (for the outputs-over-inputs check).
+std::vector<std::string> AmplitudeLevelFiles(const std::vector<std::string>& level_args);
+
+/// The JSON of cli.md ("ema amplitude").
+nlohmann::json AmplitudeJson(const correlation::AmplitudeResult& result);
+
+}  // namespace ema::app
