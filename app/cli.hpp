@@ -62,5 +62,6 @@ int RunCorrelate(const std::vector<std::string>& args);
 int RunDiagnose(const std::vector<std::string>& args);
 int RunRun(const std::vector<std::string>& args);
 int RunSimulate(const std::vector<std::string>& args);
+int RunQuality(const std::vector<std::string>& args);
 int RunAmplitude(const std::vector<std::string>& args);
 }  // namespace ema

@@ -11,6 +11,7 @@
 #include "ema/curvefit/fit.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
+#include "mode_indicators_json.hpp"
 #include "plot_stabilisation.hpp"
 
 namespace ema {
@@ -90,6 +91,7 @@ nlohmann::json ModesJson(const ModeSet& set, const curvefit::FitResult& fit, cur
                         {"damping_ratio_std", NumberOrNull(m.damping_ratio_std)},
                         {"mpc", NumberOrNull(m.mpc)},
                         {"mpd_deg", NumberOrNull(m.mpd)},
+                        {"mcf", NumberOrNull(m.mcf)},
                         {"pole", Complex(m.pole)},
                         {"frequency_spread_hz", NumberOrNull(m.frequency_spread_hz)},
                         {"damping_spread", NumberOrNull(m.damping_spread)},
@@ -272,8 +274,11 @@ int RunFit(const std::vector<std::string>& args) {
   }
   formats::WriteModeSet(output, fit.modes);
   if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, ModesJson(fit.modes, fit, fit_options.refine).dump(2) + "\n");
-  if (!stab_path.empty())
-    formats::WriteTextFileAtomically(stab_path, StabilisationJson(fit, fit_options.stability).dump(1) + "\n");
+  if (!stab_path.empty()) {
+    nlohmann::json stab = StabilisationJson(fit, fit_options.stability);
+    AddModeIndicatorsJson(&stab, frfs, fit_options.data, input);  // CMIF/MMIF (docs/quality.md)
+    formats::WriteTextFileAtomically(stab_path, stab.dump(1) + "\n");
+  }
   if (!plot_path.empty()) PlotStabilisation(plot_path, fit.diagram, fit.selected);
 
   std::cout << fit.modes.modes.size() << " mode(s) from " << input << " ("

@@ -21,6 +21,7 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
 #include "project_file.hpp"
+#include "quality_json.hpp"
 #include "run_history.hpp"
 #include "report.hpp"
 
@@ -134,6 +135,22 @@ std::string ParametersText(const json& parameters) {
 }
 
 // Per-test file names inside OUTDIR/<test>/.
+// The report's "Data quality" section: the `ema quality` checks of the test's FRFs in the fit band.
+template <class Runner>
+nlohmann::json ReportQuality(const FrfSet& frfs, double lo_hz, double hi_hz, const std::string& source, Runner* runner) {
+  try {
+    frf::QualityOptions options;
+    if (hi_hz > lo_hz) {
+      options.band_lo_hz = lo_hz;
+      options.band_hi_hz = hi_hz;
+    }
+    return QualityJson(frf::CheckFrfQuality({frfs}, options, {source}), {}, options);
+  } catch (const std::exception& e) {
+    runner->Problem("report: data-quality checks of " + source + ": " + e.what());
+    return nlohmann::json::object();
+  }
+}
+
 struct TestFiles {
   fs::path dir, frf, frf_json, modes, modes_json, stabilisation, model_before, model_before_json, corr_before,
       corr_before_table, model_after, model_after_json, corr_after, corr_after_table;
@@ -327,6 +344,7 @@ int RunRun(const std::vector<std::string>& args) {
       } catch (const std::exception& e) {
         runner.Problem("report: cannot read " + frf_path.string() + ": " + e.what());
       }
+      if (s.frfs) s.quality = ReportQuality(*s.frfs, s.band_lo_hz, s.band_hi_hz, frf_path.string(), &runner);
     }
     int frf_count = 0, rejected = 0;
     if (s.frf_summary.contains("frfs") && s.frf_summary["frfs"].is_array()) {

@@ -18,6 +18,7 @@ struct Command {
 const Command kCommands[] = {
     {"info", ema::RunInfo, "what a UFF/CSV file holds: datasets, records, nodes, ranges"},
     {"frf", ema::RunFrf, "hammer time data -> H1/H2/Hv FRFs with coherence"},
+    {"quality", ema::RunQuality, "data-quality checks: reciprocity, driving points, coherence, scatter, MPC/MPD/MCF"},
     {"fit", ema::RunFit, "FRFs -> poles (PolyMAX), stabilisation diagram, mode shapes (LSFD)"},
     {"model", ema::RunModel, "a spatial model's own modes (and --explain its operating point)"},
     {"correlate", ema::RunCorrelate, "test modes against model modes: MAC, pairing, validation table"},

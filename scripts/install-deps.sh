@@ -5,9 +5,9 @@ set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libfftw3-dev libceres-dev
           libboost-program-options-dev libgtest-dev libgmock-dev libtomlplusplus-dev
           nlohmann-json3-dev libspectra-dev libbenchmark-dev nodejs npm
-          libplplot-dev plplot-driver-cairo)
+          libplplot-dev plplot-driver-cairo libmatio-dev pybind11-dev python3-dev python3-numpy)
 if [[ "${1:-}" == "--test" ]]; then
-  packages+=(chromium clang)
+  packages+=(chromium clang python3-pytest)
 fi
 missing=()
 for p in "${packages[@]}"; do

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "embedded_assets.hpp"
+#include "report_quality.hpp"
 
 namespace ema::report {
 
@@ -181,7 +182,9 @@ json TestModeTable(const json& test_modes) {
                     {"frequency_std_hz", number(m, "frequency_std_hz")},
                     {"damping_ratio", number(m, "damping_ratio")},
                     {"damping_ratio_std", number(m, "damping_ratio_std")},
-                    {"mpc", number(m, "mpc")}});
+                    {"mpc", number(m, "mpc")},
+                    {"mpd_deg", number(m, "mpd_deg")},
+                    {"mcf", number(m, "mcf")}});
   out["modes"] = rows;
   if (test_modes.contains("refinement")) out["refinement"] = test_modes["refinement"];
   if (test_modes.contains("dropped")) out["dropped"] = test_modes["dropped"];
@@ -238,6 +241,8 @@ json BuildReportData(const ReportInput& input) {
     json s = {{"name", setup.name}};
     s["band_hz"] = {setup.band_lo_hz, setup.band_hi_hz};
     s["stabilisation"] = StabilisationData(setup);
+    s["mode_indicators"] = ModeIndicatorData(setup.stabilisation);
+    s["quality"] = QualityData(setup.quality, setup.test_modes);
     json selected = json::array();
     for (double f : test.frequency_hz) selected.push_back(Round(f));
     s["selected_hz"] = selected;

@@ -23,6 +23,7 @@ struct SetupResults {
   std::optional<FrfSet> frfs;          ///< measured FRFs (ema frf output), if available
   nlohmann::json frf_summary;          ///< `ema frf --json` (averages, rejected impacts)
   nlohmann::json stabilisation;        ///< `ema fit --stabilisation`
+  nlohmann::json quality;              ///< `ema quality --json` layout (data-quality section)
   nlohmann::json test_modes;           ///< `ema fit --json` ({"modes": [...]})
   nlohmann::json model_modes_before;   ///< `ema model --json` of the nominal model
   nlohmann::json model_modes_after;    ///< `ema model --json` of the updated model

@@ -36,13 +36,46 @@
   function unavailable(parent, what) {
     parent.appendChild(el('p', { 'class': 'missing', text: what + ': not available in this run.' }));
   }
+  // Every chart downloads as PNG and as SVG with its title (the section's heading) drawn in: the
+  // modebar's two camera buttons replace plotly's single PNG one. exportChart is also what the
+  // page's self-check (#export-check, used by the headless-browser test) runs.
+  var charts = [];
+  function fileName(title) { return title.replace(/[^A-Za-z0-9._-]+/g, '_').replace(/^_+|_+$/g, '') || 'chart'; }
+  function exportChart(gd, format, title) {
+    var layout = Object.assign({}, gd.layout, {
+      title: { text: title, x: 0.01, xanchor: 'left', font: { size: 15 } },
+      margin: Object.assign({}, gd.layout.margin || {}, { t: 60 }) });
+    var size = gd.getBoundingClientRect();
+    return Plotly.toImage({ data: gd.data, layout: layout }, { format: format,
+      width: Math.max(600, Math.round(size.width) || 900), height: Math.max(300, Math.round(size.height) || 460) });
+  }
+  function chartTitle(div) {
+    var sec = div.closest ? div.closest('section') : null;
+    var heading = sec ? sec.querySelector('h2') : null;
+    return heading ? heading.textContent : document.title;
+  }
+  function downloadButton(format) {
+    return { name: 'download-' + format, title: 'Download ' + format.toUpperCase() + ' (with title)',
+      icon: Plotly.Icons.camera, click: function (gd) {
+        var title = chartTitle(gd);
+        exportChart(gd, format, title).then(function (url) {
+          var a = el('a', { href: url, download: fileName(title) + '.' + format });
+          document.body.appendChild(a);
+          a.click();
+          a.remove();
+        }, function (e) { noteError(e); });
+      } };
+  }
   function chart(parent, traces, layout, cls) {
     var div = el('div', { 'class': 'chart ' + (cls || '') });
     parent.appendChild(div);
     expected += 1;
     layout = Object.assign({ margin: { l: 60, r: 60, t: 30, b: 50 }, font: { size: 12 },
       legend: { orientation: 'h', y: -0.2 } }, layout);
-    pending.push(Plotly.newPlot(div, traces, layout, config).then(function () {
+    charts.push(div);
+    var cfg = Object.assign({}, config, { modeBarButtonsToRemove: ['toImage'],
+      modeBarButtonsToAdd: [downloadButton('png'), downloadButton('svg')] });
+    pending.push(Plotly.newPlot(div, traces, layout, cfg).then(function () {
       rendered += 1;
       div.setAttribute('data-rendered', '1');
       return div;
@@ -77,11 +110,60 @@
     var frf = setup.frf || {};
     var band = setup.band_hz || [0, 0];
 
+    // Data quality: coherence map, reciprocity, driving points, scatter, mode complexity.
+    var q = setup.quality || {};
+    var qs = section(wrap, 'Data quality — ' + setup.name,
+      'Checks of the measured FRFs before fitting (ema quality, docs/quality.md): reciprocity H_ij against H_ji, the ' +
+      'sign of each driving point at its resonances (a flip means an inverted sensor or hammer), the coherence of ' +
+      'every FRF at every line (dark = low), the impact-to-impact scatter of |H| from coherence and the averaged ' +
+      'impacts, and the complexity of each fitted mode (MPC, MPD, MCF).');
+    if (q.verdict) qs.appendChild(el('p', { 'class': q.verdict === 'pass' ? 'verdict' : 'missing',
+      text: 'Overall: ' + q.verdict + ' (' + q.warnings + ' warning(s) over ' + q.frf_count + ' FRFs)' }));
+    if (q.coherence_map) {
+      var cm = q.coherence_map;
+      chart(qs, [{ type: 'heatmap', x: cm.frequency_hz, y: cm.labels, z: cm.z, zmin: 0, zmax: 1, colorscale: 'Viridis',
+        colorbar: { title: { text: 'coherence' } },
+        hovertemplate: '%{y}<br>%{x} Hz<br>coherence %{z}<extra></extra>' }],
+        { height: Math.min(900, Math.max(260, 16 * cm.labels.length + 110)),
+          xaxis: { title: { text: 'frequency (Hz)' } }, yaxis: { automargin: true, type: 'category' } });
+    } else if (q.verdict) {
+      unavailable(qs, 'Coherence map (the FRF file has no coherence)');
+    }
+    if (q.reciprocity && q.reciprocity.length) {
+      qs.appendChild(el('h3', { text: 'Reciprocity' }));
+      table(qs, ['H_ij / H_ji', 'difference %', 'verdict', 'reason'], q.reciprocity.map(function (c) {
+        return [c.i.node + c.i.dir + ' / ' + c.j.node + c.j.dir, fmt(100 * c.relative_difference, 1), c.verdict, c.reason];
+      }), 'small');
+    }
+    if (q.driving_points && q.driving_points.length) {
+      qs.appendChild(el('h3', { text: 'Driving points' }));
+      table(qs, ['DOF', 'resonances', 'wrong sign', 'verdict', 'reason'], q.driving_points.map(function (c) {
+        return [c.dof.node + c.dof.dir, c.resonances, c.flipped, c.verdict, c.reason];
+      }), 'small');
+    }
+    if (q.frfs_warn && q.frfs_warn.length) {
+      qs.appendChild(el('h3', { text: 'Coherence and scatter warnings' }));
+      table(qs, ['FRF', 'mean coherence', 'scatter % (median)', 'reason'], q.frfs_warn.map(function (c) {
+        return [c.response.node + c.response.dir + ' / ' + c.reference.node + c.reference.dir, fmt(c.mean_coherence, 3),
+          fmt(100 * c.median_random_error, 1), c.reason];
+      }), 'small');
+    }
+    if (q.modes && q.modes.length) {
+      qs.appendChild(el('h3', { text: 'Mode complexity' }));
+      table(qs, ['mode', 'f (Hz)', 'MPC', 'MPD (deg)', 'MCF'], q.modes.map(function (m) {
+        return [m.mode, fmt(m.frequency_hz, 2), fmt(m.mpc, 3), fmt(m.mpd_deg, 1), fmt(m.mcf, 3)];
+      }), 'small');
+    }
+    if (q.notes && q.notes.length) qs.appendChild(el('ul', { 'class': 'note' }, q.notes.map(function (n) { return el('li', { text: n }); })));
+    if (!q.verdict && !(q.modes && q.modes.length)) unavailable(qs, 'Data-quality checks');
+
     // Stabilisation diagram with the sum of FRFs on a second axis.
     var stab = section(wrap, 'Stabilisation diagram — ' + setup.name,
       'Poles of every model order (filled: stable in frequency, damping and participation vector; diamonds: stable ' +
       'in frequency and one more criterion or frequency only; open circles: new or unstable; ×: non-physical). ' +
-      'Dashed lines: the modes selected automatically. Grey: sum of all FRF magnitudes. Drag to zoom, double-click to reset.');
+      'Dashed lines: the modes selected automatically. Grey: sum of all FRF magnitudes; purple: the first two ' +
+      'singular values of the FRF matrix (CMIF: a peak in the second one is a close or repeated mode the sum hides); ' +
+      'orange dots: the MMIF (0 to 1, dips at resonances). Drag to zoom, double-click to reset.');
     var st = setup.stabilisation || {};
     if (st.order && st.order.length) {
       var groups = {};
@@ -106,12 +188,21 @@
       });
       if (frf.sum_magnitude) traces.push({ type: 'scatter', mode: 'lines', name: 'sum of |FRF|', x: frf.frequency_hz,
         y: frf.sum_magnitude, yaxis: 'y2', line: { color: '#888', width: 1 }, hoverinfo: 'skip' });
+      var mi = setup.mode_indicators || {};
+      (mi.cmif || []).forEach(function (sv, i) {
+        traces.push({ type: 'scatter', mode: 'lines', name: 'CMIF ' + (i + 1), x: mi.frequency_hz, y: sv, yaxis: 'y2',
+          line: { color: i === 0 ? '#762a83' : '#c2a5cf', width: 1 }, hoverinfo: 'skip' });
+      });
+      if (mi.mmif) traces.push({ type: 'scatter', mode: 'lines', name: 'MMIF', x: mi.frequency_hz, y: mi.mmif,
+        yaxis: 'y3', line: { color: '#e08214', width: 1, dash: 'dot' }, hoverinfo: 'skip' });
       var shapes = (setup.selected_hz || []).map(function (f) {
         return { type: 'line', x0: f, x1: f, yref: 'paper', y0: 0, y1: 1, line: { color: '#2166ac', dash: 'dash', width: 1 } };
       });
       chart(stab, traces, { height: 460, xaxis: { title: { text: 'frequency (Hz)' } },
         yaxis: { title: { text: 'model order' } },
-        yaxis2: { title: { text: 'sum |H|' }, overlaying: 'y', side: 'right', type: 'log', showgrid: false },
+        yaxis2: { title: { text: mi.cmif ? 'sum |H|, CMIF' : 'sum |H|' }, overlaying: 'y', side: 'right', type: 'log',
+          showgrid: false },
+        yaxis3: { overlaying: 'y', side: 'right', range: [0, 1.05], visible: false },
         shapes: shapes });
     } else {
       unavailable(stab, 'Stabilisation diagram');
@@ -217,9 +308,9 @@
         return fmt(v === null ? v : scale * v, digits) + (s === null || s === undefined ? '' : ' ± ' +
           Number(scale * s).toPrecision(2));
       };
-      table(tms, ['mode', 'f ± σ (Hz)', 'ζ ± σ (%)', 'MPC'], tm.modes.map(function (m, i) {
+      table(tms, ['mode', 'f ± σ (Hz)', 'ζ ± σ (%)', 'MPC', 'MPD (deg)', 'MCF'], tm.modes.map(function (m, i) {
         return [i + 1, pm(m.frequency_hz, m.frequency_std_hz, 1, 3), pm(m.damping_ratio, m.damping_ratio_std, 100, 3),
-          fmt(m.mpc, 3)];
+          fmt(m.mpc, 3), fmt(m.mpd_deg, 1), fmt(m.mcf, 3)];
       }));
       (tm.dropped || []).forEach(function (d) {
         tms.appendChild(el('p', { 'class': 'note', text: 'Pole at ' + fmt(d.frequency_hz, 2) + ' Hz dropped: ' + d.reason }));
@@ -442,6 +533,10 @@
     files.appendChild(el('ul', { 'class': 'files' }, data.files.map(function (f) { return el('li', null, [el('code', { text: f })]); })));
   }
 
+  // Printing: redraw the charts at the page's width (and back at the window's afterwards).
+  function resizeCharts() { charts.forEach(function (div) { Plotly.Plots.resize(div); }); }
+  window.addEventListener('beforeprint', resizeCharts);
+  window.addEventListener('afterprint', resizeCharts);
   // ---- amplitude dependence (ema amplitude --json; docs/amplitude.md) ----
   function drawAmplitude(amp) {
     if (!amp || !amp.modes || !amp.modes.length) return;
@@ -477,5 +572,19 @@
   body.setAttribute('data-charts-expected', String(expected));
   Promise.all(pending).then(function () {
     body.setAttribute('data-charts-rendered', String(rendered));
-  }, function (e) { noteError(e); });
+    // Self-check of the download buttons (opened as report.html#export-check by the tests): every
+    // chart exported as SVG (its text must hold the chart's title) and as PNG.
+    if (window.location.hash !== '#export-check') return;
+    var svg = 0, png = 0;
+    return Promise.all(charts.map(function (div) {
+      var title = chartTitle(div);
+      return Promise.all([exportChart(div, 'svg', title), exportChart(div, 'png', title)]).then(function (urls) {
+        if (decodeURIComponent(urls[0]).indexOf(title) >= 0) svg += 1;
+        if (urls[1].indexOf('data:image/png;base64,') === 0 && urls[1].length > 1000) png += 1;
+      });
+    })).then(function () {
+      body.setAttribute('data-export-svg', String(svg));
+      body.setAttribute('data-export-png', String(png));
+    });
+  }).catch(function (e) { noteError(e); });
 })();

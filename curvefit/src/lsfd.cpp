@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "ema/core/error.hpp"
+#include "ema/curvefit/complexity.hpp"
 
 namespace ema::curvefit {
 
@@ -185,6 +186,7 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
     mode.shape = shape;
     mode.mpc = ModalPhaseCollinearity(shape);
     mode.mpd = MeanPhaseDeviationDeg(shape);
+    mode.mcf = ModeComplexityFactor(shape);
     set.modes.push_back(std::move(mode));
   }
   return result;

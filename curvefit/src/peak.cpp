@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "ema/curvefit/complexity.hpp"
 #include "ema/curvefit/lsfd.hpp"
 
 namespace ema::curvefit {
@@ -92,6 +93,7 @@ ModeSet PeakPick(const FitData& data, const PeakOptions& options) {
     if (std::abs(mode.shape[omax]) > 0.0) mode.shape /= mode.shape[omax];
     mode.mpc = ModalPhaseCollinearity(mode.shape);
     mode.mpd = MeanPhaseDeviationDeg(mode.shape);
+    mode.mcf = ModeComplexityFactor(mode.shape);
     set.modes.push_back(std::move(mode));
   }
   return set;

@@ -114,6 +114,7 @@ std::vector<TimeRecord> ReadTimeRecords(const std::filesystem::path& path) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw InputError(path.string(), "no such file");
     if (std::filesystem::file_size(path, ec) == 0) throw InputError(path.string(), "empty file");
+    if (LooksLikeMat(path)) return ReadMatTimeRecords(path);
     return ReadCsvTimeRecords(path);
   }
   uff::Reader reader(path);
@@ -509,6 +510,9 @@ ModeSet ReadModeSet(const std::filesystem::path& path) {
     if (const auto* cs = std::get_if<uff::CoordinateSystems18>(&d.body))
       for (const auto& s : cs->systems) systems[s.number] = s;
     const auto* a = std::get_if<uff::Data55>(&d.body);
+    uff::Data55 from2414;  // FE modes exported as dataset 2414 (Simcenter/NX, Permas ...)
+    if (const auto* raw = std::get_if<uff::RawDataset>(&d.body); raw && d.number == 2414)
+      if (uff::Decode2414AsData55(*raw, where, &from2414)) a = &from2414;
     if (!a) continue;
     Shape s;
     Mode& m = s.mode;
@@ -553,7 +557,7 @@ ModeSet ReadModeSet(const std::filesystem::path& path) {
       for (auto& [k, val] : s.values) val = std::conj(val);
     shapes.push_back(std::move(s));
   }
-  if (shapes.empty()) throw InputError(path.string(), "no mode shapes (dataset 55 with analysis type 2, 3 or 7) in the file");
+  if (shapes.empty()) throw InputError(path.string(), "no mode shapes (dataset 55 or 2414 with analysis type 2, 3 or 7) in the file");
   // Shape values are given in each node's displacement coordinate system (dataset 15 field 3);
   // Test.Lab writes one Cartesian CS per node (dataset 18). Rotate them to the global frame so
   // that every ModeSet is global and the MAC compares like with like.

@@ -20,6 +20,8 @@ struct BrowserResult {
   std::string page_errors;     ///< data-errors (window.onerror / rejected promises)
   std::string console_errors;  ///< console messages at error level and uncaught exceptions
   int rendered_divs = 0;       ///< chart divs holding an SVG or WebGL/3D plot
+  int exported_svg = -1;       ///< data-export-svg (page opened with #export-check)
+  int exported_png = -1;       ///< data-export-png
 };
 
 inline std::string ReadWhole(const std::filesystem::path& path) {
@@ -29,7 +31,9 @@ inline std::string ReadWhole(const std::filesystem::path& path) {
   return text.str();
 }
 
-inline BrowserResult CheckInChromium(const std::filesystem::path& html, const std::filesystem::path& work_dir) {
+/// `fragment` (e.g. "#export-check") is appended to the page's URL.
+inline BrowserResult CheckInChromium(const std::filesystem::path& html, const std::filesystem::path& work_dir,
+                                     const std::string& fragment = "") {
   BrowserResult result;
   std::filesystem::create_directories(work_dir);
   const auto dom = work_dir / "dom.html", log = work_dir / "chromium.log", profile = work_dir / "profile";
@@ -39,7 +43,7 @@ inline BrowserResult CheckInChromium(const std::filesystem::path& html, const st
       "chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
       "--disable-background-networking --disable-component-update --disable-sync --disable-dev-shm-usage "
       "--enable-logging=stderr --v=0 --virtual-time-budget=5000 --user-data-dir='" + profile.string() +
-      "' --dump-dom 'file://" + std::filesystem::absolute(html).string() + "' > '" + dom.string() + "' 2> '" +
+      "' --dump-dom 'file://" + std::filesystem::absolute(html).string() + fragment + "' > '" + dom.string() + "' 2> '" +
       log.string() + "'";
   if (std::system(command.c_str()) != 0) return result;
   const std::string text = ReadWhole(dom);
@@ -48,6 +52,8 @@ inline BrowserResult CheckInChromium(const std::filesystem::path& html, const st
   if (std::regex_search(text, m, std::regex("data-charts-expected=\"([0-9]+)\""))) result.expected = std::stoi(m[1]);
   if (std::regex_search(text, m, std::regex("data-charts-rendered=\"([0-9]+)\""))) result.rendered = std::stoi(m[1]);
   if (std::regex_search(text, m, std::regex("data-errors=\"([^\"]*)\""))) result.page_errors = m[1];
+  if (std::regex_search(text, m, std::regex("data-export-svg=\"([0-9]+)\""))) result.exported_svg = std::stoi(m[1]);
+  if (std::regex_search(text, m, std::regex("data-export-png=\"([0-9]+)\""))) result.exported_png = std::stoi(m[1]);
   // A rendered plotly chart holds an <svg class="main-svg"> (2D and 3D alike).
   for (size_t at = text.find("data-rendered=\"1\""); at != std::string::npos; at = text.find("data-rendered=\"1\"", at + 1))
     ++result.rendered_divs;

@@ -189,10 +189,10 @@ TEST_F(GuidewayRun, ReportRendersInHeadlessChromium) {
   ASSERT_TRUE(r.ran);
   EXPECT_EQ(r.page_errors, "");
   EXPECT_EQ(r.console_errors, "");
-  // Per test: stabilisation, FRFs, 2 MAC matrices, mode shapes; then the ranking and the error
-  // fall; then the diagnosed places on the geometry, the error per added effect (rank 1 holds two
-  // effects here) and the history over runs.
-  EXPECT_EQ(r.expected, 2 * 5 + 2 + 3);
+  // Per test: coherence map, stabilisation, FRFs, 2 MAC matrices, mode shapes; then the ranking
+  // and the error fall; then the diagnosed places on the geometry, the error per added effect
+  // (rank 1 holds two effects here) and the history over runs.
+  EXPECT_EQ(r.expected, 2 * 6 + 2 + 3);
   EXPECT_EQ(r.rendered, r.expected);
   EXPECT_EQ(r.rendered_divs, r.expected);
 }

@@ -196,6 +196,8 @@ TEST_F(FitOptions, MpcAndMpdMatchAHandComputationFromTheWrittenShapes) {
     const double mean = 0.5 * (sxx + syy), dev = std::sqrt(0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy);
     const double l1 = mean + dev, l2 = mean - dev;
     EXPECT_NEAR(mode.at("mpc").get<double>(), std::pow((l1 - l2) / (l1 + l2), 2), 1e-9);
+    // MCF = 1 - |psi^T psi|^2 / (psi^H psi)^2 = 4 l1 l2 / (l1 + l2)^2 (pyEMA: MCF).
+    EXPECT_NEAR(mode.at("mcf").get<double>(), 4.0 * l1 * l2 / ((l1 + l2) * (l1 + l2)), 1e-9);
     const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);  // principal direction of S
     const double vx = std::cos(angle), vy = std::sin(angle);
     double num = 0, den = 0;

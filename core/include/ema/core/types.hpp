@@ -127,6 +127,7 @@ struct Mode {
   Eigen::VectorXcd participation;      ///< per reference (empty for model modes)
   double mpc = kNaN;                   ///< modal phase collinearity, 0..1
   double mpd = kNaN;                   ///< mean phase deviation, degrees
+  double mcf = kNaN;                   ///< mode complexity factor 1 - MPC(eigen form), 0 = real mode
   double frequency_spread_hz = kNaN;   ///< std. dev. of the stable-pole cluster
   double damping_spread = kNaN;        ///< std. dev. of the cluster's damping ratio
   double frequency_std_hz = kNaN;      ///< 1 sigma of frequency_hz from the data's noise (ML refinement)

@@ -14,9 +14,18 @@ struct WriteOptions {
   bool binary = false;  ///< write 58b (binary) where the dataset allows it; ASCII otherwise
 };
 
-/// Hammer-test time data: UFF 58/58b function-type-1 records, or CSV (docs/formats.md), chosen by
+/// Hammer-test time data: UFF 58/58b function-type-1 records, MATLAB .mat, or CSV (docs/formats.md), chosen by
 /// content (a CSV file does not start with a UFF delimiter). Throws InputError naming file/line.
 std::vector<TimeRecord> ReadTimeRecords(const std::filesystem::path& path);
+
+/// MATLAB .mat hammer-test time data (v5/v7/v7.3, through matio), docs/formats.md "MATLAB .mat
+/// time data": `fs` [Hz] (or `dt` [s]), `force` (samples × impacts), `response` (samples ×
+/// channels [× impacts]), `reference` ('1+Z'), `channels` ({'1+Z', '2+Z'}), optional `quantity`,
+/// `force_unit`, `response_unit`. ReadTimeRecords dispatches here for .mat files.
+std::vector<TimeRecord> ReadMatTimeRecords(const std::filesystem::path& path);
+
+/// True when the file starts with a MATLAB 5.0/7.3 MAT-file header.
+bool LooksLikeMat(const std::filesystem::path& path);
 
 /// Writes time records as UFF 58 (function type 1) in the convention `ema frf` reads.
 void WriteTimeRecords(const std::filesystem::path& path, const std::vector<TimeRecord>& records,

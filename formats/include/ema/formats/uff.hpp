@@ -201,6 +201,12 @@ class Reader {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Dataset 2414 (analysis data, kept as a RawDataset by the reader) as its dataset-55
+/// equivalent: normal (2) and complex (3, 7) modes of displacement/velocity/acceleration data at
+/// nodes. False for other results (element data, static, stresses ...). Throws InputError naming
+/// `where` and the record for malformed records.
+bool Decode2414AsData55(const RawDataset& raw, const std::string& where, Data55* out);
+
 /// Reads every dataset of a file.
 std::vector<Dataset> ReadFile(const std::filesystem::path& path, ReadOptions options = {});
 

@@ -1,0 +1,130 @@
+"""The ema Python module against the ema CLI on the same files: every number the CLI writes with
+full precision (JSON) must come back from Python bit for bit; FRFs written to UFF (13 significant
+digits) agree to that last digit."""
+import numpy as np
+import pytest
+
+import ema
+from conftest import SHARED, SOURCE, load_json, run_ema
+
+
+def test_module_and_functions_have_docstrings():
+    assert "numpy" in ema.__doc__
+    for name in ["read_frfs", "read_modes", "estimate_frfs", "fit", "mode_indicators", "mac", "correlate", "quality"]:
+        assert getattr(ema, name).__doc__, name
+
+
+def test_fit_matches_cli_bit_for_bit(beam_fit):
+    sample, d = beam_fit
+    cli = load_json(d / "modes.json")["modes"]
+    py = ema.fit(str(sample), band=(30.0, 300.0), order_max=40)
+    assert len(py["frequency_hz"]) == len(cli) == 3
+    for r, m in enumerate(cli):
+        assert py["frequency_hz"][r] == m["frequency_hz"]
+        assert py["damping_ratio"][r] == m["damping_ratio"]
+        assert py["mpc"][r] == m["mpc"]
+        assert py["mpd_deg"][r] == m["mpd_deg"]
+        assert py["mcf"][r] == m["mcf"]
+        assert py["frequency_std_hz"][r] == m["frequency_std_hz"]
+        assert py["damping_ratio_std"][r] == m["damping_ratio_std"]
+        assert py["order"][r] == m["order"]
+        for i, v in enumerate(m["shape"]):
+            assert py["dofs"][i] == (v["node"], v["dir"])
+            assert py["shapes"][i, r] == complex(*v["value"])
+
+
+def test_read_modes_matches_what_fit_wrote(beam_fit):
+    _, d = beam_fit
+    cli = load_json(d / "modes.json")["modes"]
+    modes = ema.read_modes(str(d / "modes.unv"))
+    # The UFF 55 ID line carries f with 12 significant digits (%.12g): equal to that last digit.
+    np.testing.assert_allclose(modes["frequency_hz"], [m["frequency_hz"] for m in cli], rtol=5e-12, atol=0)
+    assert modes["shapes"].shape == (len(cli[0]["shape"]), 3)
+
+
+def test_mode_indicators_match_the_stabilisation_json(beam_fit):
+    sample, d = beam_fit
+    stab = load_json(d / "stab.json")
+    mi = ema.mode_indicators(str(sample), band=(30.0, 300.0))
+    assert mi["frequency_hz"].tolist() == stab["cmif"]["frequency_hz"]
+    assert mi["cmif"].shape[1] == len(stab["cmif"]["values"])
+    assert mi["cmif"][:, 0].tolist() == stab["cmif"]["values"][0]
+    assert mi["mmif"][:, 0].tolist() == stab["mmif"]["values"][0]
+
+
+def test_correlate_matches_cli(beam_fit, tmp):
+    sample, d = beam_fit
+    # A second fit (another band and order) against the first: a non-trivial pairing.
+    run_ema("fit", sample, "-o", tmp / "other.unv", "--band", "20:400", "--order-max", "30")
+    run_ema("correlate", d / "modes.unv", tmp / "other.unv", "--json", tmp / "corr.json")
+    cli = load_json(tmp / "corr.json")
+    py = ema.correlate(str(d / "modes.unv"), str(tmp / "other.unv"))
+    assert len(py["pairs"]) == len(cli["pairs"]) > 0
+    for p, c in zip(py["pairs"], cli["pairs"]):
+        for key in ["test_mode", "model_mode", "test_frequency_hz", "model_frequency_hz", "agreement_pct", "mac"]:
+            assert p[key] == c[key], key
+    assert py["mean_mac"] == cli["summary"]["mean_mac"]
+    # The MAC matrix holds the paired entries.
+    for p in py["pairs"]:
+        assert py["mac"][p["test_mode"] - 1, p["model_mode"] - 1] == p["mac"]
+
+
+def test_mac_of_known_shapes():
+    a = np.array([[1.0, 0.0], [1.0, 1.0]], dtype=complex)
+    b = np.array([[2.0j], [2.0j]])
+    # MAC(a0, b) = |2j + 2j|^2 / (2 * 8) = 1; MAC(a1, b) = |2j|^2 / (1 * 8) = 0.5.
+    np.testing.assert_allclose(ema.mac(a, b)[:, 0], [1.0, 0.5], rtol=1e-15)
+
+
+def test_quality_matches_cli(beam_fit, tmp):
+    sample, d = beam_fit
+    run_ema("quality", sample, "--modes", d / "modes.unv", "--json", tmp / "q.json")
+    cli = load_json(tmp / "q.json")
+    py = ema.quality(str(sample), modes=str(d / "modes.unv"))
+    assert py == cli
+
+
+def test_quality_on_arrays_finds_the_inverted_driving_point():
+    # Two-mode accelerance (e^{+jwt}), driving point 1/1 and transfer 2/1; Im(A_11) >= 0 when passive.
+    f = np.arange(0.0, 200.0, 0.5)
+    w = 2 * np.pi * f
+    h = np.zeros((1, len(f), 2), dtype=complex)
+    for fn, zeta, phi in [(40.0, 0.01, (1.0, 0.8)), (120.0, 0.02, (1.0, -0.6))]:
+        wn = 2 * np.pi * fn
+        rec = 1.0 / (wn**2 - w**2 + 2j * zeta * wn * w)
+        h[0, :, 0] += -(w**2) * phi[0] * phi[0] * rec
+        h[0, :, 1] += -(w**2) * phi[1] * phi[0] * rec
+    frfs = {"frequency_hz": f, "outputs": [(1, "+Z"), (2, "+Z")], "references": [(1, "+Z")], "h": h}
+    good = ema.quality(frfs)
+    assert good["driving_points"][0]["verdict"] == "pass"
+    assert good["driving_points"][0]["resonances"] == 2
+    frfs["h"] = h * np.array([-1.0, 1.0])  # sensor 1 mounted upside down
+    bad = ema.quality(frfs)
+    assert bad["driving_points"][0]["verdict"] == "warn"
+    assert bad["driving_points"][0]["flipped"] == 2
+    assert bad["verdict"] == "warn"
+
+
+def test_estimate_frfs_matches_cli_to_the_digits_written(tmp):
+    data = SHARED / "hammer-pyfrf" / "hammer-5-impacts.unv"
+    if not data.exists():
+        pytest.skip("shared data not present")
+    run_ema("frf", data, "-o", tmp / "frf.unv")
+    written = ema.read_frfs(str(tmp / "frf.unv"))
+    py = ema.estimate_frfs([str(data)])
+    assert py["outputs"] == written["outputs"] and py["references"] == written["references"]
+    np.testing.assert_allclose(py["frequency_hz"], written["frequency_hz"], rtol=1e-12, atol=0)
+    # UFF 58 FRFs are written with 13 significant digits: agreement to that last digit.
+    scale = np.abs(py["h"]).max()
+    assert np.abs(py["h"] - written["h"]).max() <= 1e-12 * scale
+    np.testing.assert_allclose(py["coherence"], written["coherence"], rtol=1e-11, atol=1e-12)
+    assert (py["averages"] == written["averages"]).all()
+
+
+def test_bad_input_raises_with_the_file_name(tmp):
+    missing = tmp / "missing.unv"
+    with pytest.raises(ValueError, match="missing.unv"):
+        ema.read_modes(str(missing))
+    with pytest.raises(ValueError):
+        ema.fit({"frequency_hz": [1.0, 2.0], "outputs": [(1, "+Z")], "references": [(1, "+Z")],
+                 "h": np.zeros((2, 2, 1), dtype=complex)})
