@@ -80,6 +80,14 @@ json AmplitudeJson(const correlation::AmplitudeResult& r) {
 }
 
 
+void AttachSidecarUncertainty(const std::string& modes_path, ModeSet* modes) {
+  const std::vector<correlation::ModeUncertainty> u = SidecarUncertainty(modes_path, *modes);
+  for (std::size_t i = 0; i < u.size() && i < modes->modes.size(); ++i) {
+    modes->modes[i].frequency_std_hz = u[i].frequency_std_hz;
+    modes->modes[i].damping_ratio_std = u[i].damping_ratio_std;
+  }
+}
+
 std::vector<std::string> AmplitudeLevelFiles(const std::vector<std::string>& level_args) {
   std::vector<std::string> files;
   for (const std::string& a : level_args) {

@@ -19,6 +19,11 @@ std::vector<correlation::AmplitudeLevel> ReadAmplitudeLevels(const std::vector<s
 /// The mode files named by `LEVEL=MODES.unv` arguments (for the outputs-over-inputs check).
 std::vector<std::string> AmplitudeLevelFiles(const std::vector<std::string>& level_args);
 
+/// Fills each mode's frequency_std_hz / damping_ratio_std from the `ema fit --json` file beside
+/// `modes_path` (same stem, .json) when it holds the same modes; UFF 55 carries no σ. Used by
+/// `ema diagnose` to weigh each test mode by how well it was measured.
+void AttachSidecarUncertainty(const std::string& modes_path, ModeSet* modes);
+
 /// The JSON of cli.md ("ema amplitude").
 nlohmann::json AmplitudeJson(const correlation::AmplitudeResult& result);
 

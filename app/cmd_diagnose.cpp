@@ -201,6 +201,7 @@ int RunDiagnose(const std::vector<std::string>& args) {
     auto [setup, path] = SplitSetup(t);
     ModeSet modes = formats::ReadModeSet(path);
     if (modes.source.empty()) modes.source = path;
+    app::AttachSidecarUncertainty(path, &modes);  // σ of each mode from `ema fit --json`, when beside it
     sets.push_back({setup, std::move(modes)});
   }
   dopt.progress = [](double f, std::string_view stage) { cli::DrawProgress(f, std::string(stage)); };

@@ -98,7 +98,10 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
     for (Eigen::Index i = 0; i < n; ++i) {
       const Mode& m = t.modes.modes[static_cast<size_t>(i)];
       s.test_hz(i) = m.frequency_hz;
-      const double measured = std::isfinite(m.frequency_spread_hz) ? m.frequency_spread_hz : 0.0;
+      // How well the mode was measured: its ML σ (ema fit), else the stabilisation spread.
+      const double measured = std::isfinite(m.frequency_std_hz)      ? m.frequency_std_hz
+                              : std::isfinite(m.frequency_spread_hz) ? m.frequency_spread_hz
+                                                                     : 0.0;
       s.sigma_hz(i) = std::max(measured, options.frequency_floor * m.frequency_hz);
     }
     s.model_dof_count = sol.modes.dofs.size();
