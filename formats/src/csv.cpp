@@ -10,35 +10,16 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
+#include "text_fields.hpp"
 #include "text_lines.hpp"
 
 namespace ema::formats {
 
 namespace {
 
-std::string TrimCopy(std::string_view s) {
-  size_t a = 0, b = s.size();
-  while (a < b && (s[a] == ' ' || s[a] == '\t' || s[a] == '\r' || s[a] == '"')) ++a;
-  while (b > a && (s[b - 1] == ' ' || s[b - 1] == '\t' || s[b - 1] == '\r' || s[b - 1] == '"')) --b;
-  return std::string(s.substr(a, b - a));
-}
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-std::vector<std::string> Split(const std::string& line, char sep) {
-  std::vector<std::string> out;
-  size_t start = 0;
-  for (;;) {
-    const size_t p = line.find(sep, start);
-    out.push_back(TrimCopy(std::string_view(line).substr(start, p == std::string::npos ? std::string::npos : p - start)));
-    if (p == std::string::npos) break;
-    start = p + 1;
-  }
-  return out;
-}
+using text::Lower;
+using text::Split;
+using text::Trim;
 
 struct Column {
   enum Kind { kTime, kImpact, kChannel } kind = kChannel;
@@ -56,8 +37,8 @@ Column ParseHeader(const std::string& raw, const std::string& where) {
   if (lb != std::string::npos) {
     const auto rb = name.find(']', lb);
     if (rb == std::string::npos) throw InputError(where, "column '" + raw + "': unclosed '[' in the unit");
-    unit = TrimCopy(std::string_view(name).substr(lb + 1, rb - lb - 1));
-    name = TrimCopy(std::string_view(name).substr(0, lb));
+    unit = Trim(std::string_view(name).substr(lb + 1, rb - lb - 1));
+    name = Trim(std::string_view(name).substr(0, lb));
   }
   const std::string low = Lower(name);
   if (low == "time" || low == "t") {
@@ -144,7 +125,7 @@ std::vector<TimeRecord> ReadCsvTimeRecords(const std::filesystem::path& path) {
   while (ReadTextLine(in, &line, file, line_no + 1)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (TrimCopy(line).empty() || line[0] == '#') continue;
+    if (Trim(line).empty() || line[0] == '#') continue;
     if (line.find(',') == std::string::npos) sep = line.find(';') != std::string::npos ? ';' : '\t';
     for (const auto& name : Split(line, sep)) cols.push_back(ParseHeader(name, file + ":" + std::to_string(line_no)));
     header_line = line_no;
@@ -185,7 +166,7 @@ std::vector<TimeRecord> ReadCsvTimeRecords(const std::filesystem::path& path) {
   while (ReadTextLine(in, &line, file, line_no + 1)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (TrimCopy(line).empty() || line[0] == '#') continue;
+    if (Trim(line).empty() || line[0] == '#') continue;
     const auto fields = Split(line, sep);
     const std::string where = file + ":" + std::to_string(line_no);
     if (fields.size() != cols.size())

@@ -11,37 +11,21 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
+#include "text_fields.hpp"
 #include "text_lines.hpp"
 
 namespace ema::formats {
 
 namespace {
 
-std::string Trim(std::string_view s) {
-  size_t a = 0, b = s.size();
-  while (a < b && (s[a] == ' ' || s[a] == '\t' || s[a] == '\r' || s[a] == '"')) ++a;
-  while (b > a && (s[b - 1] == ' ' || s[b - 1] == '\t' || s[b - 1] == '\r' || s[b - 1] == '"')) --b;
-  return std::string(s.substr(a, b - a));
-}
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
+using text::Lower;
+using text::ParseDofText;
+using text::Trim;
 
 /// Cells of one row: split at the table's separator, or at runs of blanks when it has none.
 std::vector<std::string> Cells(const std::string& line, char sep) {
+  if (sep != ' ') return text::Split(line, sep);
   std::vector<std::string> out;
-  if (sep != ' ') {
-    size_t start = 0;
-    for (;;) {
-      const size_t p = line.find(sep, start);
-      out.push_back(Trim(std::string_view(line).substr(start, p == std::string::npos ? std::string::npos : p - start)));
-      if (p == std::string::npos) break;
-      start = p + 1;
-    }
-    return out;
-  }
   size_t i = 0;
   while (i < line.size()) {
     while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
@@ -83,27 +67,6 @@ std::optional<std::complex<double>> ParseComplexCell(std::string s) {
   if (s.empty() || !uff::ParseReal(s, &re)) return std::nullopt;
   if (std::isnan(re)) im = re;  // a bare "nan" marks the whole value as missing
   return std::complex<double>(re, im);
-}
-
-/// `101+Z`, `101:+Z`, `101-RX`: a node and a signed direction.
-std::optional<Dof> ParseDofText(const std::string& text) {
-  std::string t = Trim(text);
-  size_t split = t.find(':');
-  std::string node_s, dir_s;
-  if (split != std::string::npos) {
-    node_s = t.substr(0, split);
-    dir_s = t.substr(split + 1);
-  } else {
-    split = t.find_first_of("+-");
-    if (split == std::string::npos || split == 0) return std::nullopt;
-    node_s = t.substr(0, split);
-    dir_s = t.substr(split);
-  }
-  std::int64_t node = 0;
-  if (!uff::ParseInteger(Trim(node_s), &node) || node <= 0 || node > 2147483647) return std::nullopt;
-  const int dir = ParseDirection(Trim(dir_s));
-  if (dir == 0) return std::nullopt;
-  return Dof{static_cast<int>(node), dir};
 }
 
 /// `RESPONSE/REFERENCE` (`1+X/2+X`): the FRF's response and reference DOFs.

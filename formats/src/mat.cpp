@@ -17,33 +17,14 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
+#include "text_fields.hpp"
 
 namespace ema::formats {
 
 namespace {
 
-/// `101+Z`, `101:+Z`, `101-RX` (the FRF-table convention of docs/formats.md).
-std::optional<Dof> ParseDofText(const std::string& raw) {
-  std::string t;
-  for (char c : raw)
-    if (!std::isspace(static_cast<unsigned char>(c))) t += c;
-  size_t split = t.find(':');
-  std::string node_s, dir_s;
-  if (split != std::string::npos) {
-    node_s = t.substr(0, split);
-    dir_s = t.substr(split + 1);
-  } else {
-    split = t.find_first_of("+-");
-    if (split == std::string::npos || split == 0) return std::nullopt;
-    node_s = t.substr(0, split);
-    dir_s = t.substr(split);
-  }
-  std::int64_t node = 0;
-  if (!uff::ParseInteger(node_s, &node) || node <= 0 || node > 2147483647) return std::nullopt;
-  const int dir = ParseDirection(dir_s);
-  if (dir == 0) return std::nullopt;
-  return Dof{static_cast<int>(node), dir};
-}
+using text::Lower;
+using text::ParseDofText;  // the FRF-table convention of docs/formats.md
 
 struct MatCloser {
   void operator()(mat_t* m) const { Mat_Close(m); }
@@ -148,11 +129,6 @@ std::vector<std::string> TextList(const matvar_t* v, const std::string& where) {
     return out;
   }
   throw InputError(where, "variable 'channels': expected a cell array of DOF names such as {'1+Z', '2+Z'}");
-}
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 }  // namespace
