@@ -72,6 +72,28 @@ TEST_F(DiagnoseCli, CriterionBicAndAiccScoreByTheirFormulas) {
   }
 }
 
+TEST_F(DiagnoseCli, ProbabilitiesAreTheNormalisedEvidence) {
+  // probability_i = exp(−score_i/2) / Σ exp(−score_j/2) with score = −2 log evidence: on the
+  // guideway several candidates (the sensors' mass at one point or another) share the
+  // probability, so the ratios p_i/p_1 = exp(−(s_i − s_1)/2) are checked where both are > 1e-9.
+  const json d = Diagnose("evidence", "");
+  const auto& c = d.at("candidates");
+  ASSERT_GT(c.size(), 2u);
+  double sum = 0.0;
+  for (const auto& k : c) sum += k.at("probability").get<double>();
+  EXPECT_NEAR(sum, 1.0, 1e-9);
+  const double p1 = c[0].at("probability").get<double>(), s1 = c[0].at("score").get<double>();
+  EXPECT_NEAR(c[0].at("log_evidence").get<double>(), -0.5 * s1, 1e-9 * std::abs(s1));
+  int checked = 0;
+  for (size_t i = 1; i < c.size(); ++i) {
+    const double p = c[i].at("probability").get<double>();
+    if (!(p > 1e-9) || !c[i].at("score").is_number()) continue;
+    EXPECT_NEAR(std::log(p / p1), -0.5 * (c[i].at("score").get<double>() - s1), 1e-6) << c[i].at("description");
+    ++checked;
+  }
+  EXPECT_GE(checked, 2) << "the guideway's near-equal candidates";
+}
+
 TEST_F(DiagnoseCli, ShapeWeightSetsTheShapeSigma) {
   // --shape-weight W means a shape σ of 0.001 / W (documented old form of --shape-sigma): with
   // W = 1 the MAC residuals weigh 10× more than with the default σ 0.01, so the model as given

@@ -335,6 +335,37 @@ TEST(Diagnose, BadInput) {
   }
 }
 
+TEST(Diagnose, PriorPullsTheFitTowardsTheModel) {
+  // The base really is 4 % heavier. Declared as weighed to 0.5 % (uncertainty), the MAP fit of
+  // mass_scale must sit closer to 1 than with a loose prior (0.5 = "known to a factor 1.5"): the
+  // prior is part of the objective, not only of the evidence.
+  Model nominal = Guideway();
+  model::Effect truth_effect;
+  truth_effect.kind = "mass_scale";
+  truth_effect.target = "base";
+  truth_effect.parameters["factor"] = 1.04;
+  const Model truth = model::ApplyEffect(nominal, truth_effect);
+  const std::vector<SetupModes> tests = {{"stud-5um", NoisyTest(truth, "stud-5um", 11, 3e-4, 3e-3)},
+                                         {"stud-9um", NoisyTest(truth, "stud-9um", 12, 3e-4, 3e-3)}};
+  DiagnoseOptions options;
+  options.max_effects = 1;
+  auto fitted = [&](double uncertainty, Diagnosis* out) {
+    Model m = nominal;
+    for (auto& b : m.bodies)
+      if (b.name == "base") b.uncertainty = uncertainty;
+    *out = Diagnose(m, tests, options);
+    for (const Candidate& c : out->candidates)
+      if (c.kind == "mass_scale" && c.target == "base") return FittedValue(c, "factor");
+    return kNaN;
+  };
+  Diagnosis loose, tight;
+  const double f_loose = fitted(0.5, &loose), f_tight = fitted(0.005, &tight);
+  ASSERT_TRUE(std::isfinite(f_loose) && std::isfinite(f_tight));
+  EXPECT_NEAR(f_loose, 1.04, 0.01) << loose.explanation;  // the data's own answer
+  EXPECT_LT(f_tight, f_loose - 1e-4) << "a tight prior must pull the MAP estimate towards 1";
+  EXPECT_GT(f_tight, 1.0);
+}
+
 TEST(EffectProbabilities, SumOverTheCandidatesThatHoldEachEffect) {
   // Four ranked candidates with probabilities 0.4 / 0.3 / 0.2 / 0.1. By hand:
   //   series_compliance on bearings: 0.4 + 0.3 + 0.2 = 0.9
