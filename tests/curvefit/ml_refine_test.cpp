@@ -248,13 +248,8 @@ namespace {
 // half-power bands, 0.5 Hz each side, overlap). PolyMAX finds two poles with the same
 // participation and disjoint shapes; automatic selection must report one mode and say why.
 TEST(SplitPoles, RovingSetInconsistencyGivesOneMode) {
-  const Truth a = MakeTruth({30.0, 50.0, 80.0}, {0.01, 0.01, 0.01}, 12);
-  Truth b = a;
-  b.modes[1].f_hz = 50.4;
-  const FrfSet set_a = MakeFrfSet(a, {1, 8}, 120.0, 0.05, 0.01, 31);
-  const FrfSet set_b = MakeFrfSet(b, {1, 8}, 120.0, 0.05, 0.01, 32);
-  FrfSet frfs = set_a;
-  for (size_t r = 0; r < frfs.h.size(); ++r) frfs.h[r].rightCols(6) = set_b.h[r].rightCols(6);
+  const Truth a = MakeTruth({30.0, 50.0, 80.0}, {0.01, 0.01, 0.01}, 12);  // the true shapes
+  const FrfSet frfs = test::TwoRovingSetsWithShiftedMode(50.4);
   FitOptions options;
   options.polymax.order_max = 40;
   const FitResult fit = Fit(frfs, options);

@@ -72,13 +72,7 @@ TEST(SplitPoles, MergedWhenTheShiftIsWithinBothHalfPowerBandsTogether) {
   // As SplitPoles.RovingSetInconsistencyGivesOneMode, with the second set's mode 0.8 Hz higher:
   // more than one half-power half-width (ζ f = 0.5 Hz) but less than the two together (1.0 Hz),
   // so the two poles' bands still overlap and they are one mode.
-  const Truth a = MakeTruth({30.0, 50.0, 80.0}, {0.01, 0.01, 0.01}, 12);
-  Truth b = a;
-  b.modes[1].f_hz = 50.8;
-  const FrfSet set_a = MakeFrfSet(a, {1, 8}, 120.0, 0.05, 0.01, 31);
-  const FrfSet set_b = MakeFrfSet(b, {1, 8}, 120.0, 0.05, 0.01, 32);
-  FrfSet frfs = set_a;
-  for (size_t r = 0; r < frfs.h.size(); ++r) frfs.h[r].rightCols(6) = set_b.h[r].rightCols(6);
+  const FrfSet frfs = test::TwoRovingSetsWithShiftedMode(50.8);
   FitOptions options;
   options.polymax.order_max = 40;
   const FitResult fit = Fit(frfs, options);

@@ -74,4 +74,18 @@ inline FrfSet MakeFrfSet(const Truth& truth, const std::vector<int>& refs, doubl
   return set;
 }
 
+/// Roving-set inconsistency: modes at 30, 50 and 80 Hz (ζ 1 %, 12 outputs, references 2 and 9)
+/// with the 50 Hz mode measured at `shifted_hz` on outputs 7-12 (the second roving set, whose
+/// sensors load the structure differently); 1 % noise, fixed seeds.
+inline FrfSet TwoRovingSetsWithShiftedMode(double shifted_hz) {
+  const Truth a = MakeTruth({30.0, 50.0, 80.0}, {0.01, 0.01, 0.01}, 12);
+  Truth b = a;
+  b.modes[1].f_hz = shifted_hz;
+  const FrfSet set_a = MakeFrfSet(a, {1, 8}, 120.0, 0.05, 0.01, 31);
+  const FrfSet set_b = MakeFrfSet(b, {1, 8}, 120.0, 0.05, 0.01, 32);
+  FrfSet frfs = set_a;
+  for (size_t r = 0; r < frfs.h.size(); ++r) frfs.h[r].rightCols(6) = set_b.h[r].rightCols(6);
+  return frfs;
+}
+
 }  // namespace ema::curvefit::test
