@@ -21,8 +21,10 @@ constexpr long kMaxDimension = 100000000;  // 1e8 DOFs: far beyond a modal model
 }  // namespace
 
 Eigen::SparseMatrix<double> ReadMatrixMarket(const std::filesystem::path& path) {
-  std::ifstream in(path);
   const std::string file = path.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(file, "is a folder: expected a Matrix Market file");
+  std::ifstream in(path);
   if (!in) throw InputError(file, "cannot open Matrix Market file");
   std::string line;
   int line_no = 0;

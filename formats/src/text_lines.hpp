@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <ios>
 #include <istream>
 #include <string>
 
@@ -22,7 +23,14 @@ inline bool ReadTextLine(std::istream& in, std::string* line, const std::string&
   std::streambuf* buf = in.rdbuf();
   if (!in.good() || buf == nullptr) return false;
   for (;;) {
-    const int c = buf->sbumpc();
+    int c = 0;
+    try {
+      c = buf->sbumpc();
+    } catch (const std::ios_base::failure& e) {
+      // libstdc++'s filebuf throws when the read itself fails, e.g. on a folder opened as a file.
+      throw InputError(file + ":" + std::to_string(line_no), std::string("cannot read (") + e.what() +
+                                                                  "): expected a text file");
+    }
     if (c == std::char_traits<char>::eof()) {
       if (line->empty()) {
         in.setstate(std::ios::eofbit | std::ios::failbit);

@@ -133,6 +133,26 @@ TEST(MatrixMarket, TruncatedFileIsInputError) {
   }
 }
 
+TEST(MatrixMarket, AFolderIsInputErrorNotACrash) {
+  // Found by the model-file fuzzer: an [fe] path naming a folder made the stream throw
+  // std::ios_base::failure, which escaped as a crash instead of exit 1.
+  const fs::path dir = testing::TempDir("mm") / "a-folder.mtx";
+  fs::create_directories(dir);
+  try {
+    formats::ReadMatrixMarket(dir);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a folder"), std::string::npos) << e.what();
+  }
+  // The same for any text reader going through ReadTextLine: a curve file that is a folder.
+  const fs::path model = testing::WriteText(testing::TempDir("mm") / "curve-folder.toml",
+                                            "[model]\nname = \"m\"\n[[body]]\nname = \"b\"\nmass = 1.0\n"
+                                            "inertia = [1.0, 1.0, 1.0]\n[[spring]]\nname = \"s\"\ngroup = \"g\"\n"
+                                            "a = { body = \"b\", at = [0.0, 0.0, 0.0] }\nb = { body = \"ground\" }\n"
+                                            "direction = [0.0, 0.0, 1.0]\nlaw = { table = { file = \"a-folder.mtx\" } }\n");
+  EXPECT_THROW(formats::ReadModelFile(model), InputError);
+}
+
 const char* kCarriage = R"([model]
 name = "pad"
 
