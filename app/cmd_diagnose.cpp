@@ -126,10 +126,7 @@ std::string DiagnosisSummary(const diagnose::Diagnosis& d) {
   // how sure each of its effects is, whichever candidate holds it.
   if (first.probability < 0.9) {
     for (const auto& e : first.effects) {
-      const auto slash = e.target.find('/');
-      const std::string wildcard = slash != std::string::npos                              ? e.target.substr(0, slash) + "/*"
-                                   : e.target.rfind("points:", 0) == 0 && e.target.find(',') == std::string::npos ? "points:*"
-                                                                                          : e.target;
+      const std::string wildcard = diagnose::EffectWildcard(e.target);
       for (const auto& ep : d.effect_probabilities)
         if (ep.kind == e.kind && ep.target == wildcard) {
           std::snprintf(p, sizeof p, "%.1f %%", 100.0 * ep.probability);

@@ -207,6 +207,13 @@ std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
 using detail::FormatNumber;
 using detail::Join;
 
+std::string EffectWildcard(const std::string& target) {
+  const auto slash = target.find('/');
+  if (slash != std::string::npos) return target.substr(0, slash) + "/*";
+  if (target.rfind("points:", 0) == 0 && target.find(',') == std::string::npos) return "points:*";
+  return target;
+}
+
 std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>& ranked) {
   std::map<std::pair<std::string, std::string>, double> sums;
   for (const Candidate& c : ranked) {
@@ -215,9 +222,7 @@ std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>&
     std::set<std::pair<std::string, std::string>> keys;
     for (const model::Effect& e : c.effects) {
       keys.insert({e.kind, e.target});
-      const auto slash = e.target.find('/');
-      if (slash != std::string::npos) keys.insert({e.kind, e.target.substr(0, slash) + "/*"});
-      if (e.target.rfind("points:", 0) == 0 && e.target.find(',') == std::string::npos) keys.insert({e.kind, "points:*"});
+      keys.insert({e.kind, EffectWildcard(e.target)});
     }
     for (const auto& k : keys) sums[k] += c.probability;
   }

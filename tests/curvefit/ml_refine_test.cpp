@@ -99,6 +99,19 @@ struct McStats {
   std::vector<double> f_err, f_sd, z_err, z_sd;
 };
 
+/// Adds one realisation's errors and σ of each true mode (the fitted mode nearest it) to stats.
+void Collect(const FitResult& fit, const std::vector<double>& f, const std::vector<double>& z, std::vector<McStats>* stats) {
+  for (size_t r = 0; r < f.size(); ++r) {
+    const int k = Nearest(fit.modes, f[r]);
+    ASSERT_GE(k, 0);
+    const Mode& m = fit.modes.modes[k];
+    (*stats)[r].f_err.push_back(m.frequency_hz - f[r]);
+    (*stats)[r].f_sd.push_back(m.frequency_std_hz);
+    (*stats)[r].z_err.push_back(m.damping_ratio - z[r]);
+    (*stats)[r].z_sd.push_back(m.damping_ratio_std);
+  }
+}
+
 void CheckMonteCarlo(const std::vector<McStats>& stats, const std::vector<double>& f, const std::vector<double>& z) {
   for (size_t r = 0; r < stats.size(); ++r) {
     const McStats& s = stats[r];
@@ -145,15 +158,7 @@ TEST(MlRefine, MonteCarloBiasAndCoverageResidualNoise) {
     const FrfSet frfs = MakeFrfSet(truth, {1, 4}, 120.0, 0.1, 0.05, seed);
     const FitResult fit = Fit(frfs, options);
     ASSERT_TRUE(fit.refine.IsSolutionUsable()) << seed << ": " << fit.refine.BriefReport();
-    for (size_t r = 0; r < f.size(); ++r) {
-      const int k = Nearest(fit.modes, f[r]);
-      ASSERT_GE(k, 0);
-      const Mode& m = fit.modes.modes[k];
-      stats[r].f_err.push_back(m.frequency_hz - f[r]);
-      stats[r].f_sd.push_back(m.frequency_std_hz);
-      stats[r].z_err.push_back(m.damping_ratio - z[r]);
-      stats[r].z_sd.push_back(m.damping_ratio_std);
-    }
+    ASSERT_NO_FATAL_FAILURE(Collect(fit, f, z, &stats));
   }
   CheckMonteCarlo(stats, f, z);
 }
@@ -191,15 +196,7 @@ TEST(MlRefine, MonteCarloBiasAndCoverageCoherenceNoise) {
     const FitResult fit = Fit(frfs, options);
     ASSERT_TRUE(fit.refine.IsSolutionUsable()) << seed << ": " << fit.refine.BriefReport();
     ASSERT_EQ(fit.refine.noise_source, NoiseSource::kCoherence);
-    for (size_t r = 0; r < f.size(); ++r) {
-      const int k = Nearest(fit.modes, f[r]);
-      ASSERT_GE(k, 0);
-      const Mode& m = fit.modes.modes[k];
-      stats[r].f_err.push_back(m.frequency_hz - f[r]);
-      stats[r].f_sd.push_back(m.frequency_std_hz);
-      stats[r].z_err.push_back(m.damping_ratio - z[r]);
-      stats[r].z_sd.push_back(m.damping_ratio_std);
-    }
+    ASSERT_NO_FATAL_FAILURE(Collect(fit, f, z, &stats));
   }
   CheckMonteCarlo(stats, f, z);
 }

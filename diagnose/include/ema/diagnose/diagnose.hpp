@@ -137,6 +137,10 @@ struct EffectProbability {
   double probability = 0.0;
 };
 
+/// The wildcard an effect target is summed under: "GROUP/*" for a member, "points:*" for a single
+/// point, the target itself otherwise.
+std::string EffectWildcard(const std::string& target);
+
 /// The effect probabilities of ranked candidates, most probable first (≥ 1 % only).
 std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>& ranked);
 
