@@ -11,7 +11,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/uff.hpp"
-#include "uff_internal.hpp"
+#include "uff_lexer.hpp"
 
 namespace ema::formats::uff {
 

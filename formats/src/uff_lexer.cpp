@@ -1,4 +1,6 @@
-// UFF streaming reader (spec uff.md §1, §2, §3-§13, architecture of §16).
+// UFF lexer (spec uff.md §1, §2): Fortran numbers, column slicing with the UTF-8 rule, tokens,
+// delimiter lines, and the buffered binary-mode input the reader pulls lines and 58b payloads from.
+// The text readers (CSV, FRF tables) parse their numbers with the same ParseReal/ParseInteger.
 #include <algorithm>
 #include <bit>
 #include <cerrno>
@@ -11,7 +13,7 @@
 
 #include "ema/core/error.hpp"
 #include "ema/formats/uff.hpp"
-#include "uff_internal.hpp"
+#include "uff_lexer.hpp"
 
 namespace ema::formats::uff {
 

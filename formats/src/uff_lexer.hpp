@@ -1,4 +1,6 @@
-// Internal helpers of the UFF reader/writer (not installed).
+// The UFF lexer (uff_lexer.cpp; not installed): trimming, tokens, column slices, delimiter lines
+// and the buffered input file, shared by the reader and the writer. The number parsers
+// (ParseReal, ParseInteger) are public in ema/formats/uff.hpp.
 #pragma once
 
 #include <cstdint>
