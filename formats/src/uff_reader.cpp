@@ -1,4 +1,5 @@
-// UFF dataset state machine and per-dataset decoders (spec uff.md §1.2 framing, §3-§13).
+// UFF reader: the dataset state machine, the per-dataset decoders (spec uff.md §1.2 framing,
+// §3-§13), the DOFs hidden in entity names (§12.2), and the parallel split of big files.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <thread>
 
 #include "ema/core/error.hpp"
+#include "ema/core/types.hpp"
 #include "ema/formats/uff.hpp"
 #include "uff_lexer.hpp"
 
@@ -1041,6 +1043,48 @@ void Reader::Impl::ReadBinary58(std::string_view id_line, std::int64_t id_line_n
     if (Trim(line).empty()) in.NextLine(&line);
     if (!IsDelimiterLine(line)) where.Fail(in.LineNumber(), "(58b): expected the closing '-1' after the payload");
   }
+}
+
+bool DecodeEntityName(std::string_view name, std::int64_t* node, int* direction) {
+  std::string_view s = Trim(name);
+  if (!s.empty() && s.front() == '.') s.remove_prefix(1);
+  size_t i = 0;
+  while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
+  if (i == 0 || i > 10) return false;
+  std::int64_t n = 0;
+  if (!ParseInteger(s.substr(0, i), &n) || n <= 0) return false;
+  s.remove_prefix(i);
+  if (!s.empty() && (s.front() == '.' || s.front() == ':')) s.remove_prefix(1);
+  int sign = 1;
+  if (!s.empty() && (s.front() == '+' || s.front() == '-')) {
+    sign = s.front() == '-' ? -1 : 1;
+    s.remove_prefix(1);
+  } else if (!s.empty() && (s.back() == '+' || s.back() == '-')) {
+    sign = s.back() == '-' ? -1 : 1;
+    s.remove_suffix(1);
+  }
+  const int axis = AxisCode(s);
+  if (axis == 0) return false;
+  *node = n;
+  *direction = sign * axis;
+  return true;
+}
+
+bool ApplyEntityNameDofs(Function58* f) {
+  bool changed = false;
+  std::int64_t node;
+  int dir;
+  if (f->response_node == 0 && f->response_direction == 0 && DecodeEntityName(f->response_entity, &node, &dir)) {
+    f->response_node = node;
+    f->response_direction = dir;
+    changed = true;
+  }
+  if (f->reference_node == 0 && f->reference_direction == 0 && DecodeEntityName(f->reference_entity, &node, &dir)) {
+    f->reference_node = node;
+    f->reference_direction = dir;
+    changed = true;
+  }
+  return changed;
 }
 
 // ------------------------------------------------------------------------------------------
