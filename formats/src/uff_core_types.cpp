@@ -1,4 +1,7 @@
-// File-level API: UFF 58/55/15 and CSV <-> core vocabulary types (see docs/formats.md).
+// UFF datasets <-> core vocabulary types (docs/formats.md): time records (58, type 1), FRF sets
+// (58, types 4 and 6) and mode sets (55 with 15/2411/2414 geometry and results). The entry points
+// of ema/formats/io.hpp; time data that is not UFF goes on to csv.cpp or mat.cpp, FRFs that are
+// not UFF to frf_table.cpp.
 #include "ema/formats/io.hpp"
 
 #include <algorithm>
