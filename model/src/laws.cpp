@@ -1,10 +1,11 @@
 // Operating points and linearised stiffness of every interface law (model-format.md "Laws").
+#include "ema/model/laws.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
 #include "ema/core/error.hpp"
-#include "ema/model/solve.hpp"
 #include "interpolant.hpp"
 
 namespace ema::model {
