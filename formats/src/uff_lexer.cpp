@@ -253,6 +253,44 @@ std::vector<std::string_view> Tokens(std::string_view line, bool split_signs) {
   return out;
 }
 
+std::vector<std::int64_t> LineIntegers(std::string_view line, const std::string& where, const std::string& what,
+                                       size_t need, int width) {
+  std::vector<std::int64_t> out;
+  auto take = [&](std::string_view t) {
+    std::int64_t v;
+    if (!ParseInteger(t, &v)) throw InputError(where, what + ": '" + std::string(t) + "' is not an integer");
+    out.push_back(v);
+  };
+  for (std::string_view t : Tokens(line, false)) {
+    if (static_cast<int>(t.size()) <= width) {
+      take(t);
+      continue;
+    }
+    // A full field touching its neighbour: cut the token where the field columns fall.
+    const size_t start = static_cast<size_t>(t.data() - line.data());
+    size_t field_end = (start / width + 1) * width;
+    for (size_t a = start; a < start + t.size(); field_end += width) {
+      const size_t b = std::min(field_end, start + t.size());
+      take(line.substr(a, b - a));
+      a = b;
+    }
+  }
+  if (out.size() < need)
+    throw InputError(where, what + ": expected at least " + std::to_string(need) + " integers, got " +
+                                std::to_string(out.size()));
+  return out;
+}
+
+std::vector<double> LineReals(std::string_view line, const std::string& where, const std::string& what) {
+  std::vector<double> out;
+  for (std::string_view t : Tokens(line, true)) {
+    double v;
+    if (!ParseReal(t, &v)) throw InputError(where, what + ": '" + std::string(t) + "' is not a number");
+    out.push_back(v);
+  }
+  return out;
+}
+
 // ------------------------------------------------------------------------------------------
 // Buffered binary-mode input with 64-bit offsets.
 
