@@ -22,6 +22,13 @@ void CheckModeSet(const ModeSet& set, const char* role) {
                                   " shape values, expected one per DOF (" + std::to_string(set.dofs.size()) + ")");
 }
 
+void SetTestComplexity(const Mode& mode, CorrelationRow* row) {
+  row->test_damping_ratio = mode.damping_ratio;
+  row->test_mpc = mode.mpc;
+  row->test_mpd_deg = mode.mpd;
+  row->test_mcf = mode.mcf;
+}
+
 std::string Fixed(double value, int digits) {
   if (std::isnan(value)) return "";
   char buffer[64];
@@ -90,7 +97,7 @@ CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const Cor
     if (i >= 0) {
       row.test_mode = i;
       row.test_frequency_hz = test_hz(i);
-      row.test_damping_ratio = test.modes[i].damping_ratio;
+      SetTestComplexity(test.modes[i], &row);
       row.agreement_pct = AgreementPct(model_hz(j), test_hz(i));
       row.frequency_error_pct = FrequencyErrorPct(model_hz(j), test_hz(i));
       row.mac = result.mac(i, j);
@@ -112,7 +119,7 @@ CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const Cor
     CorrelationRow row;
     row.test_mode = i;
     row.test_frequency_hz = test_hz(i);
-    row.test_damping_ratio = test.modes[i].damping_ratio;
+    SetTestComplexity(test.modes[i], &row);
     row.remark = "test-only";
     if (row.test_damping_ratio > options.interface_damping_ratio) row.remark += "; interface-dominated";
     result.rows.push_back(row);
@@ -138,15 +145,16 @@ CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const Cor
 }
 
 std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat format) {
-  const std::vector<std::string> header = {"Mode",      "Model f [Hz]", "Test f [Hz]", "Test damping [%]",
-                                           "Agreement [%]", "Δf [%]",   "MAC",         "Remark"};
+  const std::vector<std::string> header = {"Mode",   "Model f [Hz]", "Test f [Hz]", "Test damping [%]",
+                                           "Agreement [%]", "Δf [%]", "MAC", "MPC", "MPD [°]", "MCF", "Remark"};
   std::vector<std::vector<std::string>> body;
   int number = 0;
   for (const CorrelationRow& row : result.rows) {
     ++number;
     body.push_back({std::to_string(number), Fixed(row.model_frequency_hz, 1), Fixed(row.test_frequency_hz, 1),
                     Fixed(100.0 * row.test_damping_ratio, 2), Fixed(row.agreement_pct, 1),
-                    Fixed(row.frequency_error_pct, 1), Fixed(row.mac, 3), row.remark});
+                    Fixed(row.frequency_error_pct, 1), Fixed(row.mac, 3), Fixed(row.test_mpc, 3),
+                    Fixed(row.test_mpd_deg, 1), Fixed(row.test_mcf, 3), row.remark});
   }
   std::ostringstream out;
   const std::string summary = std::string("Shared DOFs: ") + std::to_string(result.shared_dof_count) + " of " +
@@ -172,7 +180,8 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
     }
     case TableFormat::kCsv: {
       // Plain ASCII headers for spreadsheets.
-      out << "mode,model_frequency_hz,test_frequency_hz,test_damping_pct,agreement_pct,frequency_error_pct,mac,remark\n";
+      out << "mode,model_frequency_hz,test_frequency_hz,test_damping_pct,agreement_pct,frequency_error_pct,mac,"
+             "test_mpc,test_mpd_deg,test_mcf,remark\n";
       for (const auto& r : body) {
         for (size_t k = 0; k < r.size(); ++k) {
           if (k) out << ',';
