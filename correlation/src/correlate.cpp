@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "ema/core/error.hpp"
+#include "ema/core/text.hpp"
 #include "ema/correlation/mac.hpp"
 
 namespace ema::correlation {
@@ -27,26 +28,6 @@ void SetTestComplexity(const Mode& mode, CorrelationRow* row) {
   row->test_mpc = mode.mpc;
   row->test_mpd_deg = mode.mpd;
   row->test_mcf = mode.mcf;
-}
-
-std::string Fixed(double value, int digits) {
-  if (std::isnan(value)) return "";
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
-  return buffer;
-}
-
-std::string HtmlEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 }  // namespace
@@ -151,17 +132,17 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
   int number = 0;
   for (const CorrelationRow& row : result.rows) {
     ++number;
-    body.push_back({std::to_string(number), Fixed(row.model_frequency_hz, 1), Fixed(row.test_frequency_hz, 1),
-                    Fixed(100.0 * row.test_damping_ratio, 2), Fixed(row.agreement_pct, 1),
-                    Fixed(row.frequency_error_pct, 1), Fixed(row.mac, 3), Fixed(row.test_mpc, 3),
-                    Fixed(row.test_mpd_deg, 1), Fixed(row.test_mcf, 3), row.remark});
+    body.push_back({std::to_string(number), FixedPoint(row.model_frequency_hz, 1), FixedPoint(row.test_frequency_hz, 1),
+                    FixedPoint(100.0 * row.test_damping_ratio, 2), FixedPoint(row.agreement_pct, 1),
+                    FixedPoint(row.frequency_error_pct, 1), FixedPoint(row.mac, 3), FixedPoint(row.test_mpc, 3),
+                    FixedPoint(row.test_mpd_deg, 1), FixedPoint(row.test_mcf, 3), row.remark});
   }
   std::ostringstream out;
   const std::string summary = std::string("Shared DOFs: ") + std::to_string(result.shared_dof_count) + " of " +
                               std::to_string(result.test_dof_count) + " test DOFs; " +
                               std::to_string(result.pairing.pairs.size()) + " pairs, mean agreement " +
-                              Fixed(result.mean_agreement_pct, 1) + " %, min " + Fixed(result.min_agreement_pct, 1) +
-                              " %, mean MAC " + Fixed(result.mean_mac, 3);
+                              FixedPoint(result.mean_agreement_pct, 1) + " %, min " + FixedPoint(result.min_agreement_pct, 1) +
+                              " %, mean MAC " + FixedPoint(result.mean_mac, 3);
   switch (format) {
     case TableFormat::kMarkdown: {
       out << "# Validation table\n\n" << summary << "\n\n|";
@@ -175,7 +156,7 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
         out << '\n';
       }
       out << "\n## COMAC (worst first)\n\n| DOF | COMAC |\n|---|---:|\n";
-      for (const ComacEntry& c : result.comac) out << "| " << DofName(c.dof) << " | " << Fixed(c.comac, 3) << " |\n";
+      for (const ComacEntry& c : result.comac) out << "| " << DofName(c.dof) << " | " << FixedPoint(c.comac, 3) << " |\n";
       break;
     }
     case TableFormat::kCsv: {
@@ -194,7 +175,7 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
         out << '\n';
       }
       out << "\ndof,comac\n";
-      for (const ComacEntry& c : result.comac) out << DofName(c.dof) << ',' << Fixed(c.comac, 4) << '\n';
+      for (const ComacEntry& c : result.comac) out << DofName(c.dof) << ',' << FixedPoint(c.comac, 4) << '\n';
       break;
     }
     case TableFormat::kHtml: {
@@ -211,7 +192,7 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
       }
       out << "</table>\n<h2>COMAC (worst first)</h2>\n<table>\n<tr><th>DOF</th><th>COMAC</th></tr>\n";
       for (const ComacEntry& c : result.comac)
-        out << "<tr><td>" << DofName(c.dof) << "</td><td>" << Fixed(c.comac, 3) << "</td></tr>\n";
+        out << "<tr><td>" << DofName(c.dof) << "</td><td>" << FixedPoint(c.comac, 3) << "</td></tr>\n";
       out << "</table>\n</body></html>\n";
       break;
     }
