@@ -11,7 +11,7 @@
 #include <tuple>
 
 #include "cli.hpp"
-#include "ema/acquisition/hammer_test.hpp"
+#include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/core/error.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
@@ -158,7 +158,7 @@ int RunFrfBins(const std::vector<acquisition::RecordSet>& sets, const frf::FrfOp
         if (bins[b].impacts.count({f, r.reference.node, r.reference.direction, r.impact})) part.records.push_back(r);
       if (!part.records.empty()) subset.push_back(std::move(part));
     }
-    const acquisition::HammerTest test = acquisition::AssembleHammerTest(std::move(subset));
+    const acquisition::HammerMeasurement test = acquisition::AssembleHammerMeasurement(std::move(subset));
     results.push_back(frf::EstimateFrfs(test, opt, [&](double f, std::string_view stage) {
       cli::DrawProgress((static_cast<double>(b) + f) / bins.size(), std::string(stage));
     }));
@@ -317,7 +317,7 @@ int RunFrf(const std::vector<std::string>& args) {
     sets.push_back({path, formats::ReadTimeRecords(path)});
   }
   if (force_bins > 0 || !edges.empty()) return RunFrfBins(sets, opt, output, json_path, binary, force_bins, edges);
-  const acquisition::HammerTest test = acquisition::AssembleHammerTest(std::move(sets));
+  const acquisition::HammerMeasurement test = acquisition::AssembleHammerMeasurement(std::move(sets));
   const frf::FrfResult result =
       frf::EstimateFrfs(test, opt, [](double f, std::string_view stage) { cli::DrawProgress(f, std::string(stage)); });
   cli::DrawProgress(1.0, "");

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "ema/acquisition/hammer_test.hpp"
+#include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/acquisition/simulator.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/frf/hammer_frf.hpp"
@@ -46,7 +46,7 @@ const std::vector<ema::TimeRecord>& Records() {
 }
 
 void BM_EstimateFrfsH1Coherence(benchmark::State& state) {
-  const ema::acquisition::HammerTest test = ema::acquisition::AssembleHammerTest({{"bench", Records()}});
+  const ema::acquisition::HammerMeasurement test = ema::acquisition::AssembleHammerMeasurement({{"bench", Records()}});
   for (auto _ : state) {
     ema::frf::FrfResult result = ema::frf::EstimateFrfs(test);
     benchmark::DoNotOptimize(result.frfs.h[0].data());
@@ -82,7 +82,7 @@ void BM_FromUffFile(benchmark::State& state) {
   ema::formats::WriteTimeRecords(path, Records(), options);
   for (auto _ : state) {
     std::vector<ema::acquisition::RecordSet> sets{{path.string(), ema::formats::ReadTimeRecords(path)}};
-    ema::frf::FrfResult result = ema::frf::EstimateFrfs(ema::acquisition::AssembleHammerTest(std::move(sets)));
+    ema::frf::FrfResult result = ema::frf::EstimateFrfs(ema::acquisition::AssembleHammerMeasurement(std::move(sets)));
     benchmark::DoNotOptimize(result.frfs.h[0].data());
   }
   std::filesystem::remove(path);

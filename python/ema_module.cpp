@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "ema/acquisition/hammer_test.hpp"
+#include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/core/error.hpp"
 #include "ema/correlation/correlate.hpp"
 // The diagnosis moved from correlation/ to its own module (diagnose/); build against either.
@@ -317,7 +317,7 @@ PYBIND11_MODULE(ema, m) {
         ema::frf::FrfOptions opt;
         opt.estimator = ema::frf::ParseEstimator(estimator);
         py::gil_scoped_release release;
-        const auto result = ema::frf::EstimateFrfs(ema::acquisition::AssembleHammerTest(std::move(sets)), opt);
+        const auto result = ema::frf::EstimateFrfs(ema::acquisition::AssembleHammerMeasurement(std::move(sets)), opt);
         py::gil_scoped_acquire acquire;
         return FrfDict(result.frfs);
       },

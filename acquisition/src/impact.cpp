@@ -104,7 +104,7 @@ std::string ClippingReason(const std::vector<double>& x, double full_scale, doub
   return t.Reason(full_scale, overload_fraction, flat_top_run);
 }
 
-ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& opt) {
+ProcessedTest AnalyseImpacts(const HammerMeasurement& test, const ImpactOptions& opt) {
   ProcessedTest out;
   const double dt = test.sample_interval_s;
   const int n = test.samples;

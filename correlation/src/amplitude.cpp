@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "ema/core/error.hpp"
+#include "ema/core/text.hpp"
 #include "ema/correlation/dof_match.hpp"
 #include "ema/correlation/mac.hpp"
 #include "ema/correlation/pairing.hpp"
@@ -18,12 +19,6 @@ namespace {
 std::string Num(double v, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
-
-std::string Fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
   return buf;
 }
 
@@ -122,7 +117,7 @@ std::string Reading(const AmplitudeMode& m, LevelKind kind) {
     what = "linear within the scatter";
   const std::string unit = kind == LevelKind::kResponse ? "" : " N";
   const double dpct = m.frequency_change_pct;
-  std::string f = std::string("f ") + (dpct < 0 ? "\u2212" : "+") + Fixed(std::abs(dpct), 2) + " %";
+  std::string f = std::string("f ") + (dpct < 0 ? "\u2212" : "+") + FixedPoint(std::abs(dpct), 2, "nan") + " %";
   std::string z = std::isfinite(m.damping_ratio_factor) ? ", \u03b6 \u00d7" + Num(m.damping_ratio_factor, 2) : "";
   return what + ": " + f + z + " from " + Num(p0.level, 3) + " to " + Num(pt.level, 3) + unit;
 }

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "ema/core/error.hpp"
+#include "ema/core/text.hpp"
 #include "ema/correlation/mac.hpp"
 
 namespace ema::correlation {
@@ -22,24 +23,11 @@ void CheckModeSet(const ModeSet& set, const char* role) {
                                   " shape values, expected one per DOF (" + std::to_string(set.dofs.size()) + ")");
 }
 
-std::string Fixed(double value, int digits) {
-  if (std::isnan(value)) return "";
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
-  return buffer;
-}
-
-std::string HtmlEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      default: out += c;
-    }
-  }
-  return out;
+void SetTestComplexity(const Mode& mode, CorrelationRow* row) {
+  row->test_damping_ratio = mode.damping_ratio;
+  row->test_mpc = mode.mpc;
+  row->test_mpd_deg = mode.mpd;
+  row->test_mcf = mode.mcf;
 }
 
 }  // namespace
@@ -90,7 +78,7 @@ CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const Cor
     if (i >= 0) {
       row.test_mode = i;
       row.test_frequency_hz = test_hz(i);
-      row.test_damping_ratio = test.modes[i].damping_ratio;
+      SetTestComplexity(test.modes[i], &row);
       row.agreement_pct = AgreementPct(model_hz(j), test_hz(i));
       row.frequency_error_pct = FrequencyErrorPct(model_hz(j), test_hz(i));
       row.mac = result.mac(i, j);
@@ -112,7 +100,7 @@ CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const Cor
     CorrelationRow row;
     row.test_mode = i;
     row.test_frequency_hz = test_hz(i);
-    row.test_damping_ratio = test.modes[i].damping_ratio;
+    SetTestComplexity(test.modes[i], &row);
     row.remark = "test-only";
     if (row.test_damping_ratio > options.interface_damping_ratio) row.remark += "; interface-dominated";
     result.rows.push_back(row);
@@ -138,22 +126,23 @@ CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const Cor
 }
 
 std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat format) {
-  const std::vector<std::string> header = {"Mode",      "Model f [Hz]", "Test f [Hz]", "Test damping [%]",
-                                           "Agreement [%]", "Δf [%]",   "MAC",         "Remark"};
+  const std::vector<std::string> header = {"Mode",   "Model f [Hz]", "Test f [Hz]", "Test damping [%]",
+                                           "Agreement [%]", "Δf [%]", "MAC", "MPC", "MPD [°]", "MCF", "Remark"};
   std::vector<std::vector<std::string>> body;
   int number = 0;
   for (const CorrelationRow& row : result.rows) {
     ++number;
-    body.push_back({std::to_string(number), Fixed(row.model_frequency_hz, 1), Fixed(row.test_frequency_hz, 1),
-                    Fixed(100.0 * row.test_damping_ratio, 2), Fixed(row.agreement_pct, 1),
-                    Fixed(row.frequency_error_pct, 1), Fixed(row.mac, 3), row.remark});
+    body.push_back({std::to_string(number), FixedPoint(row.model_frequency_hz, 1), FixedPoint(row.test_frequency_hz, 1),
+                    FixedPoint(100.0 * row.test_damping_ratio, 2), FixedPoint(row.agreement_pct, 1),
+                    FixedPoint(row.frequency_error_pct, 1), FixedPoint(row.mac, 3), FixedPoint(row.test_mpc, 3),
+                    FixedPoint(row.test_mpd_deg, 1), FixedPoint(row.test_mcf, 3), row.remark});
   }
   std::ostringstream out;
   const std::string summary = std::string("Shared DOFs: ") + std::to_string(result.shared_dof_count) + " of " +
                               std::to_string(result.test_dof_count) + " test DOFs; " +
                               std::to_string(result.pairing.pairs.size()) + " pairs, mean agreement " +
-                              Fixed(result.mean_agreement_pct, 1) + " %, min " + Fixed(result.min_agreement_pct, 1) +
-                              " %, mean MAC " + Fixed(result.mean_mac, 3);
+                              FixedPoint(result.mean_agreement_pct, 1) + " %, min " + FixedPoint(result.min_agreement_pct, 1) +
+                              " %, mean MAC " + FixedPoint(result.mean_mac, 3);
   switch (format) {
     case TableFormat::kMarkdown: {
       out << "# Validation table\n\n" << summary << "\n\n|";
@@ -167,12 +156,13 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
         out << '\n';
       }
       out << "\n## COMAC (worst first)\n\n| DOF | COMAC |\n|---|---:|\n";
-      for (const ComacEntry& c : result.comac) out << "| " << DofName(c.dof) << " | " << Fixed(c.comac, 3) << " |\n";
+      for (const ComacEntry& c : result.comac) out << "| " << DofName(c.dof) << " | " << FixedPoint(c.comac, 3) << " |\n";
       break;
     }
     case TableFormat::kCsv: {
       // Plain ASCII headers for spreadsheets.
-      out << "mode,model_frequency_hz,test_frequency_hz,test_damping_pct,agreement_pct,frequency_error_pct,mac,remark\n";
+      out << "mode,model_frequency_hz,test_frequency_hz,test_damping_pct,agreement_pct,frequency_error_pct,mac,"
+             "test_mpc,test_mpd_deg,test_mcf,remark\n";
       for (const auto& r : body) {
         for (size_t k = 0; k < r.size(); ++k) {
           if (k) out << ',';
@@ -185,7 +175,7 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
         out << '\n';
       }
       out << "\ndof,comac\n";
-      for (const ComacEntry& c : result.comac) out << DofName(c.dof) << ',' << Fixed(c.comac, 4) << '\n';
+      for (const ComacEntry& c : result.comac) out << DofName(c.dof) << ',' << FixedPoint(c.comac, 4) << '\n';
       break;
     }
     case TableFormat::kHtml: {
@@ -202,7 +192,7 @@ std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat 
       }
       out << "</table>\n<h2>COMAC (worst first)</h2>\n<table>\n<tr><th>DOF</th><th>COMAC</th></tr>\n";
       for (const ComacEntry& c : result.comac)
-        out << "<tr><td>" << DofName(c.dof) << "</td><td>" << Fixed(c.comac, 3) << "</td></tr>\n";
+        out << "<tr><td>" << DofName(c.dof) << "</td><td>" << FixedPoint(c.comac, 3) << "</td></tr>\n";
       out << "</table>\n</body></html>\n";
       break;
     }

@@ -1,18 +1,43 @@
 #include "ema/curvefit/complexity.hpp"
 
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "ema/core/error.hpp"
-#include "ema/curvefit/lsfd.hpp"
 
 namespace ema::curvefit {
 
-double ModeComplexityFactor(const Eigen::VectorXcd& shape) {
+double ModalPhaseCollinearity(const Eigen::VectorXcd& shape) {
   const Eigen::VectorXd x = shape.real(), y = shape.imag();
   const double sxx = x.squaredNorm(), syy = y.squaredNorm(), sxy = x.dot(y);
   const double den = (sxx + syy) * (sxx + syy);
-  if (!(den > 0.0)) return kNaN;
-  return std::max(0.0, 1.0 - ((sxx - syy) * (sxx - syy) + 4.0 * sxy * sxy) / den);
+  return den > 0.0 ? ((sxx - syy) * (sxx - syy) + 4.0 * sxy * sxy) / den : kNaN;
+}
+
+double MeanPhaseDeviationDeg(const Eigen::VectorXcd& shape) {
+  const int n = static_cast<int>(shape.size());
+  if (n == 0) return kNaN;
+  Eigen::MatrixXd ri(n, 2);
+  ri.col(0) = shape.real();
+  ri.col(1) = shape.imag();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(ri, Eigen::ComputeFullV);
+  const double vx = svd.matrixV()(0, 0), vy = svd.matrixV()(1, 0);
+  double num = 0.0, den = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double a = std::abs(shape[i]);
+    if (a == 0.0) continue;
+    const double c = std::min(1.0, std::abs(shape[i].real() * vx + shape[i].imag() * vy) / a);
+    num += a * std::acos(c);
+    den += a;
+  }
+  return den > 0.0 ? num / den * 180.0 / M_PI : kNaN;
+}
+
+double ModeComplexityFactor(const Eigen::VectorXcd& shape) {
+  const double mpc = ModalPhaseCollinearity(shape);
+  return std::isnan(mpc) ? kNaN : std::max(0.0, 1.0 - mpc);
 }
 
 bool ComplexityOptions::IsValid(std::string* error) const {

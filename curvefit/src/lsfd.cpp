@@ -13,32 +13,6 @@ namespace ema::curvefit {
 
 using cd = std::complex<double>;
 
-double ModalPhaseCollinearity(const Eigen::VectorXcd& shape) {
-  const Eigen::VectorXd x = shape.real(), y = shape.imag();
-  const double sxx = x.squaredNorm(), syy = y.squaredNorm(), sxy = x.dot(y);
-  const double den = (sxx + syy) * (sxx + syy);
-  return den > 0.0 ? ((sxx - syy) * (sxx - syy) + 4.0 * sxy * sxy) / den : kNaN;
-}
-
-double MeanPhaseDeviationDeg(const Eigen::VectorXcd& shape) {
-  const int n = static_cast<int>(shape.size());
-  if (n == 0) return kNaN;
-  Eigen::MatrixXd ri(n, 2);
-  ri.col(0) = shape.real();
-  ri.col(1) = shape.imag();
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(ri, Eigen::ComputeFullV);
-  const double vx = svd.matrixV()(0, 0), vy = svd.matrixV()(1, 0);
-  double num = 0.0, den = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const double a = std::abs(shape[i]);
-    if (a == 0.0) continue;
-    const double c = std::min(1.0, std::abs(shape[i].real() * vx + shape[i].imag() * vy) / a);
-    num += a * std::acos(c);
-    den += a;
-  }
-  return den > 0.0 ? num / den * 180.0 / M_PI : kNaN;
-}
-
 LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPole>& poles, const LsfdOptions& options) {
   const int n = data.LineCount(), l = data.OutputCount(), m = data.ReferenceCount();
   const int nm = static_cast<int>(poles.size());

@@ -2,8 +2,6 @@
 // alpha_p] (m×m blocks), basis Omega = exp(-j w dt), constraint alpha_p = I.
 #include "ema/curvefit/polymax.hpp"
 
-#include <fftw3.h>
-
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
@@ -17,6 +15,7 @@
 #include <time.h>
 
 #include "ema/core/error.hpp"
+#include "ema/frf/fft.hpp"
 
 namespace ema::curvefit {
 
@@ -29,41 +28,27 @@ double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 /// With f_n = f0 + n df and dt = 1/(N' df): Omega_n^k = exp(-j2pi f0 dt k) exp(-j2pi n k/N').
 class LagSums {
  public:
-  LagSums(int fft_length, int lines, double phase_per_lag) : n_fft_(fft_length), lines_(lines) {
-    buffer_ = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * n_fft_));
-    plan_ = fftw_plan_dft_1d(n_fft_, buffer_, buffer_, FFTW_FORWARD, FFTW_ESTIMATE);
-    phase_per_lag_ = phase_per_lag;
-  }
-  ~LagSums() {
-    fftw_destroy_plan(plan_);
-    fftw_free(buffer_);
-  }
-  LagSums(const LagSums&) = delete;
-  LagSums& operator=(const LagSums&) = delete;
+  LagSums(int fft_length, int lines, double phase_per_lag)
+      : fft_(fft_length), lines_(lines), phase_per_lag_(phase_per_lag) {}
 
   /// out[k + P] = sum_n x[n] Omega_n^k for k = -P..P.
   void Compute(const Eigen::VectorXcd& x, int max_lag, Eigen::VectorXcd* out) {
-    for (int n = 0; n < n_fft_; ++n) {
-      buffer_[n][0] = n < lines_ ? x[n].real() : 0.0;
-      buffer_[n][1] = n < lines_ ? x[n].imag() : 0.0;
-    }
-    fftw_execute(plan_);
+    const int n_fft = fft_.size();
+    std::complex<double>* buffer = fft_.data();
+    for (int n = 0; n < n_fft; ++n) buffer[n] = n < lines_ ? x[n] : std::complex<double>(0.0, 0.0);
+    fft_.Execute();
     out->resize(2 * max_lag + 1);
     for (int k = -max_lag; k <= max_lag; ++k) {
-      const int idx = ((k % n_fft_) + n_fft_) % n_fft_;
-      const std::complex<double> v(buffer_[idx][0], buffer_[idx][1]);
-      (*out)[k + max_lag] = v * std::polar(1.0, -phase_per_lag_ * k);
+      const int idx = ((k % n_fft) + n_fft) % n_fft;
+      (*out)[k + max_lag] = buffer[idx] * std::polar(1.0, -phase_per_lag_ * k);
     }
   }
 
  private:
-  int n_fft_, lines_;
-  double phase_per_lag_ = 0.0;
-  fftw_complex* buffer_ = nullptr;
-  fftw_plan plan_ = nullptr;
+  frf::ComplexFft fft_;
+  int lines_;
+  double phase_per_lag_;
 };
-
-std::mutex fftw_planner_mutex;  // FFTW's planner is not thread-safe
 
 /// Cholesky of a symmetric positive (semi)definite matrix that stops where a pivot collapses;
 /// returns the size of the well-conditioned leading block. Leading blocks of L are the factors
@@ -292,7 +277,6 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
   std::vector<Eigen::VectorXcd> s_lag(l * m);     // per (o, i)
   std::vector<Eigen::VectorXcd> t_lag(m * m);     // summed over outputs, per (i, j)
   {
-    std::lock_guard<std::mutex> lock(fftw_planner_mutex);
     LagSums lags(n_fft, n, kTwoPi * f0 * dt);
     lags.Compute(data.line_weight.cast<std::complex<double>>(), P, &r_lag);
     for (int c = 0; c < l * m; ++c) lags.Compute(hw.col(c), P, &s_lag[c]);

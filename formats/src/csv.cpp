@@ -10,7 +10,7 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
-#include "text_fields.hpp"
+#include "text_cells.hpp"
 #include "text_lines.hpp"
 
 namespace ema::formats {

@@ -11,7 +11,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
-#include "text_fields.hpp"
+#include "text_cells.hpp"
 #include "text_lines.hpp"
 
 namespace ema::formats {
@@ -87,6 +87,17 @@ Quantity ParseQuantity(const std::string& value, const std::string& where) {
   throw InputError(where, "quantity: expected acceleration, velocity or displacement, found '" + Trim(value) + "'");
 }
 
+/// The next line with content, trimmed (Trim), and its number in *line_no; false at the end.
+bool NextContentLine(std::istream& in, const std::string& file, std::int64_t* line_no, std::string* trimmed) {
+  std::string line;
+  while (ReadTextLine(in, &line, file, *line_no + 1)) {
+    ++*line_no;
+    *trimmed = Trim(line);
+    if (!trimmed->empty()) return true;
+  }
+  return false;
+}
+
 /// A `# key: value` comment line (metadata), or nothing for a plain comment.
 std::optional<std::pair<std::string, std::string>> MetadataOf(const std::string& line) {
   const size_t colon = line.find(':');
@@ -153,17 +164,14 @@ FrfSet ReadInlineTable(const std::filesystem::path& path) {
   Quantity quantity = Quantity::kAcceleration;
   std::vector<TableColumn> columns;
   char sep = ',';
-  std::string line;
   std::int64_t line_no = 0;
   std::vector<double> frequency;
   std::vector<std::int64_t> lines;
   std::vector<std::vector<std::complex<double>>> values;
   const auto header_hint = "a header such as 'frequency_hz, 1+X/2+X, 1+X/3+X' (response/reference)";
-  while (ReadTextLine(in, &line, file, line_no + 1)) {
-    ++line_no;
+  std::string trimmed;
+  while (NextContentLine(in, file, &line_no, &trimmed)) {
     const std::string where = file + ":" + std::to_string(line_no);
-    const std::string trimmed = Trim(line);
-    if (trimmed.empty()) continue;
     if (trimmed[0] == '#') {
       if (const auto meta = MetadataOf(trimmed); meta && meta->first == "quantity") quantity = ParseQuantity(meta->second, where);
       continue;
@@ -256,13 +264,10 @@ FrfSet ReadIndexedFolder(const std::filesystem::path& index) {
   std::string first_file;
   int file_col = -1, response_col = -1, reference_col = -1;
   char sep = ',';
-  std::string line;
   std::int64_t line_no = 0;
-  while (ReadTextLine(in, &line, file, line_no + 1)) {
-    ++line_no;
+  std::string trimmed;
+  while (NextContentLine(in, file, &line_no, &trimmed)) {
     const std::string where = file + ":" + std::to_string(line_no);
-    const std::string trimmed = Trim(line);
-    if (trimmed.empty()) continue;
     if (trimmed[0] == '#') {
       const auto meta = MetadataOf(trimmed);
       if (!meta) continue;
@@ -321,12 +326,10 @@ Eigen::VectorXcd ReadComplexColumnText(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), "cannot open for reading");
   std::vector<std::complex<double>> values;
-  std::string line;
   std::int64_t line_no = 0;
-  while (ReadTextLine(in, &line, path.string(), line_no + 1)) {
-    ++line_no;
-    const std::string s = Trim(line);
-    if (s.empty() || s[0] == '#') continue;
+  std::string s;
+  while (NextContentLine(in, path.string(), &line_no, &s)) {
+    if (s[0] == '#') continue;
     const auto v = ParseComplexCell(s);
     if (!v) throw InputError(path.string() + ":" + std::to_string(line_no), "expected a complex number '(re+imj)', found '" + s + "'");
     values.push_back(*v);

@@ -157,6 +157,11 @@ FileSummary SummarizeFile(const std::filesystem::path& path) {
     } else if (const auto* a55 = std::get_if<uff::Data55>(&d.body)) {
       if (a55->analysis_type == 2 || a55->analysis_type == 3 || a55->analysis_type == 7) ++s.modes;
       for (const auto& nv : a55->nodes) s.shape_nodes.insert(nv.node);
+    } else if (const auto* raw = std::get_if<uff::RawDataset>(&d.body); raw && d.number == 2412) {
+      for (const auto& e : uff::DecodeElements2412(*raw, path.string(), d.line).elements) {
+        ++s.elements;
+        ++s.element_descriptors[e.fe_descriptor];
+      }
     } else if (const auto* u = std::get_if<uff::Units164>(&d.body)) {
       s.units.push_back(u->description + " (code " + std::to_string(u->code) + ")");
     }
@@ -242,6 +247,11 @@ std::string SummaryText(const FileSummary& s) {
     out << "geometry: " << s.geometry_nodes.size() << " nodes (" << NodeList(s.geometry_nodes) << ")\n";
   if (s.modes > 0 || !s.shape_nodes.empty())
     out << "mode shapes: " << s.modes << " modes at " << s.shape_nodes.size() << " nodes\n";
+  if (s.elements > 0) {
+    out << "elements: " << s.elements << " (FE descriptor";
+    for (const auto& [descriptor, count] : s.element_descriptors) out << " " << descriptor << " x" << count;
+    out << ")\n";
+  }
   for (const auto& u : s.units) out << "units: " << u << "\n";
   for (const auto& n : s.notes) out << "note: " << n << "\n";
   return out.str();

@@ -17,7 +17,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
-#include "text_fields.hpp"
+#include "text_cells.hpp"
 
 namespace ema::formats {
 

@@ -17,44 +17,23 @@
 
 #include "ema/core/error.hpp"
 #include "ema/formats/uff.hpp"
-#include "uff_internal.hpp"
+#include "uff_lexer.hpp"
 
 namespace ema::formats::uff {
 
 namespace {
 
-std::vector<double> Numbers(std::string_view line, const std::string& where, int record) {
-  std::vector<double> out;
-  for (std::string_view t : Tokens(line, true)) {
-    double v;
-    if (!ParseReal(t, &v)) throw InputError(where, "dataset 2414 record " + std::to_string(record) + ": '" + std::string(t) + "' is not a number");
-    out.push_back(v);
-  }
-  return out;
-}
-
-std::vector<std::int64_t> Integers(std::string_view line, const std::string& where, int record, size_t need) {
-  std::vector<std::int64_t> out;
-  for (std::string_view t : Tokens(line, false)) {
-    std::int64_t v;
-    if (!ParseInteger(t, &v)) throw InputError(where, "dataset 2414 record " + std::to_string(record) + ": '" + std::string(t) + "' is not an integer");
-    out.push_back(v);
-  }
-  if (out.size() < need)
-    throw InputError(where, "dataset 2414 record " + std::to_string(record) + ": expected " + std::to_string(need) +
-                                " integers, got " + std::to_string(out.size()));
-  return out;
-}
+std::string Record(int record) { return "dataset 2414 record " + std::to_string(record); }
 
 }  // namespace
 
 bool Decode2414AsData55(const RawDataset& raw, const std::string& where, Data55* out) {
   const auto& L = raw.lines;  // L[0] is the dataset-number line
   if (L.size() < 14) throw InputError(where, "dataset 2414: " + std::to_string(L.size()) + " lines, expected at least 14 records");
-  const auto location = Integers(L[3], where, 3, 1);
+  const auto location = LineIntegers(L[3], where, Record(3), 1);
   if (location[0] != 1) return false;  // element or point data: not a nodal shape
-  const auto r9 = Integers(L[9], where, 9, 6);
-  const auto r10 = Integers(L[10], where, 10, 6);
+  const auto r9 = LineIntegers(L[9], where, Record(9), 6);
+  const auto r10 = LineIntegers(L[10], where, Record(10), 6);
   Data55 d;
   for (int k = 0; k < 5; ++k) d.id[k] = std::string(Trim(L[4 + k]));
   d.model_type = static_cast<int>(r9[0]);
@@ -76,7 +55,7 @@ bool Decode2414AsData55(const RawDataset& raw, const std::string& where, Data55*
     std::vector<double> v;
     while (v.size() < count) {
       if (line >= L.size()) throw InputError(where, "dataset 2414 record " + std::to_string(record) + ": ends early");
-      const auto more = Numbers(L[line++], where, record);
+      const auto more = LineReals(L[line++], where, Record(record));
       v.insert(v.end(), more.begin(), more.end());
     }
     return v;
@@ -97,7 +76,7 @@ bool Decode2414AsData55(const RawDataset& raw, const std::string& where, Data55*
       ++line;
       continue;
     }
-    const auto label = Integers(L[line], where, 14, 1);
+    const auto label = LineIntegers(L[line], where, Record(14), 1);
     ++line;
     Data55::NodeValues nv;
     nv.node = label[0];

@@ -11,7 +11,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/uff.hpp"
-#include "uff_internal.hpp"
+#include "uff_lexer.hpp"
 
 namespace ema::formats::uff {
 
@@ -318,54 +318,6 @@ void Write58Binary(std::ostream& out, const Function58& f) {
 }
 
 }  // namespace
-
-bool DecodeEntityName(std::string_view name, std::int64_t* node, int* direction) {
-  std::string_view s = Trim(name);
-  if (!s.empty() && s.front() == '.') s.remove_prefix(1);
-  size_t i = 0;
-  while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
-  if (i == 0 || i > 10) return false;
-  std::int64_t n = 0;
-  if (!ParseInteger(s.substr(0, i), &n) || n <= 0) return false;
-  s.remove_prefix(i);
-  if (!s.empty() && (s.front() == '.' || s.front() == ':')) s.remove_prefix(1);
-  int sign = 1;
-  if (!s.empty() && (s.front() == '+' || s.front() == '-')) {
-    sign = s.front() == '-' ? -1 : 1;
-    s.remove_prefix(1);
-  } else if (!s.empty() && (s.back() == '+' || s.back() == '-')) {
-    sign = s.back() == '-' ? -1 : 1;
-    s.remove_suffix(1);
-  }
-  static const char* kAxis[] = {"X", "Y", "Z", "RX", "RY", "RZ"};
-  for (int k = 0; k < 6; ++k) {
-    const std::string_view a(kAxis[k]);
-    if (s.size() == a.size() &&
-        std::equal(s.begin(), s.end(), a.begin(), [](char x, char y) { return (x & ~0x20) == y; })) {
-      *node = n;
-      *direction = sign * (k + 1);
-      return true;
-    }
-  }
-  return false;
-}
-
-bool ApplyEntityNameDofs(Function58* f) {
-  bool changed = false;
-  std::int64_t node;
-  int dir;
-  if (f->response_node == 0 && f->response_direction == 0 && DecodeEntityName(f->response_entity, &node, &dir)) {
-    f->response_node = node;
-    f->response_direction = dir;
-    changed = true;
-  }
-  if (f->reference_node == 0 && f->reference_direction == 0 && DecodeEntityName(f->reference_entity, &node, &dir)) {
-    f->reference_node = node;
-    f->reference_direction = dir;
-    changed = true;
-  }
-  return changed;
-}
 
 int DatasetNumberOf(const DatasetBody& body) {
   static constexpr int kNumbers[] = {151, 164, 15, 2411, 18, 2420, 82, 55, 58, 0};

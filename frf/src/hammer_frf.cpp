@@ -12,11 +12,11 @@
 
 namespace ema::frf {
 
-using acquisition::HammerTest;
+using acquisition::HammerMeasurement;
 using acquisition::Impact;
 using acquisition::ImpactAnalysis;
 
-FrfResult EstimateFrfs(const HammerTest& test, const FrfOptions& options, const ProgressCallback& progress) {
+FrfResult EstimateFrfs(const HammerMeasurement& test, const FrfOptions& options, const ProgressCallback& progress) {
   if (test.impacts.empty()) throw InputError("", "the hammer test holds no impact");
   const acquisition::ProcessedTest processed = acquisition::AnalyseImpacts(test, options.impact);
   const int n = test.samples;

@@ -1,10 +1,12 @@
 // Operating points and linearised stiffness of every interface law (model-format.md "Laws").
+#include "ema/model/laws.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "ema/core/error.hpp"
-#include "ema/model/solve.hpp"
 #include "interpolant.hpp"
 
 namespace ema::model {
@@ -147,6 +149,24 @@ SpringState SolveAirFilmChain(const SeriesLaw& series, std::size_t film_index, d
   return s;
 }
 
+/// What fixes the operating point of a law given by deflection or by force: the force when the law
+/// names a force and no deflection, else the deflection; an override (not NaN) replaces the
+/// value. Throws InputError(where, missing) when neither the law nor the override gives one.
+struct OperatingInput {
+  bool by_force = false;
+  double value = 0.0;
+};
+
+OperatingInput OperatingInputOf(const std::optional<double>& deflection, const std::optional<double>& force,
+                                double override_value, const std::string& where, const char* missing) {
+  const bool has_override = !std::isnan(override_value);
+  if (!has_override && !deflection && !force) throw InputError(where, missing);
+  OperatingInput op;
+  op.by_force = !deflection && force;
+  op.value = has_override ? override_value : op.by_force ? *force : *deflection;
+  return op;
+}
+
 }  // namespace
 
 SpringState LinearizeLaw(const Law& law, const std::string& where, double override_value) {
@@ -161,18 +181,17 @@ SpringState LinearizeLaw(const Law& law, const std::string& where, double overri
   if (const auto* table = std::get_if<TableLaw>(&law.value)) {
     CheckCurve(table->deflection, table->force, "deflection", "force", true, where);
     MonotoneCubic c(table->deflection, table->force);
-    const bool by_force = !table->operating_deflection && table->operating_force;
-    if (!has_override && !table->operating_deflection && !table->operating_force)
-      throw InputError(where, "table law needs an operating `deflection` or `force`");
+    const OperatingInput op = OperatingInputOf(table->operating_deflection, table->operating_force, override_value,
+                                               where, "table law needs an operating `deflection` or `force`");
     double d = 0.0;
-    if (by_force) {
-      const double f = has_override ? override_value : *table->operating_force;
+    if (op.by_force) {
+      const double f = op.value;
       if (f < c.YFirst() || f > c.YLast())
         throw InputError(where, "operating force " + Num(f) + " N outside the table [" + Num(c.YFirst()) + ", " +
                                     Num(c.YLast()) + "]");
       d = c.Inverse(f);
     } else {
-      d = has_override ? override_value : *table->operating_deflection;
+      d = op.value;
       if (d < c.XMin() || d > c.XMax())
         throw InputError(where, "operating deflection " + Num(d) + " m outside the table [" + Num(c.XMin()) + ", " +
                                     Num(c.XMax()) + "]");
@@ -198,15 +217,13 @@ SpringState LinearizeLaw(const Law& law, const std::string& where, double overri
     if (!(hertz->modulus > 0.0) || !(hertz->radius > 0.0))
       throw InputError(where, "hertz law needs modulus > 0 and radius > 0");
     const double c = 4.0 / 3.0 * hertz->modulus * std::sqrt(hertz->radius);
-    const bool by_force = !hertz->operating_deflection && hertz->operating_force;
-    if (!has_override && !hertz->operating_deflection && !hertz->operating_force)
-      throw InputError(where, "hertz law needs an operating `deflection` or `force` (preload)");
+    const OperatingInput op = OperatingInputOf(hertz->operating_deflection, hertz->operating_force, override_value,
+                                               where, "hertz law needs an operating `deflection` or `force` (preload)");
     double pen = 0.0;
-    if (by_force) {
-      const double f = has_override ? override_value : *hertz->operating_force;
-      pen = f > 0.0 ? std::pow(f / c, 2.0 / 3.0) : 0.0;
+    if (op.by_force) {
+      pen = op.value > 0.0 ? std::pow(op.value / c, 2.0 / 3.0) : 0.0;
     } else {
-      pen = std::max(0.0, (has_override ? override_value : *hertz->operating_deflection) - hertz->offset);
+      pen = std::max(0.0, op.value - hertz->offset);
     }
     s.deflection = hertz->offset + pen;
     s.force = c * std::pow(pen, 1.5);

@@ -70,7 +70,7 @@ TEST(Impact, DoubleHitDetectedNoFalsePositives) {
   const double ratios[] = {0.1, 0.5, 0.2, 0.1};
   for (int k = 0; k < 4; ++k) plan.double_hits.push_back({0, 0, 2 * k + 1, delays[k], ratios[k]});
   std::vector<RecordSet> sets{{"t.unv", SimulateHammerTest({sys.truth}, plan)}};
-  const HammerTest test = AssembleHammerTest(sets);
+  const HammerMeasurement test = AssembleHammerMeasurement(sets);
   const ProcessedTest p = AnalyseImpacts(test);
   for (size_t k = 0; k < test.impacts.size(); ++k) {
     const bool doubled = test.impacts[k].number % 2 == 1;
@@ -94,7 +94,7 @@ TEST(Impact, TriggerPreTriggerAndWindows) {
   plan.samples_per_record = 8192;
   plan.response_noise = 0.005;
   std::vector<RecordSet> sets{{"t.unv", SimulateHammerTest({sys.truth}, plan)}};
-  const HammerTest test = AssembleHammerTest(sets);
+  const HammerMeasurement test = AssembleHammerMeasurement(sets);
   const ProcessedTest p = AnalyseImpacts(test);
   EXPECT_EQ(p.decay_rate, 0.0);
   for (const ImpactAnalysis& a : p.impacts) {
@@ -107,7 +107,7 @@ TEST(Impact, TriggerPreTriggerAndWindows) {
   // the window itself to 1 % at the end: rate = ln(100) / (T - t_trigger).
   plan.samples_per_record = 1024;
   std::vector<RecordSet> short_sets{{"t.unv", SimulateHammerTest({sys.truth}, plan)}};
-  const HammerTest short_test = AssembleHammerTest(short_sets);
+  const HammerMeasurement short_test = AssembleHammerMeasurement(short_sets);
   const ProcessedTest q = AnalyseImpacts(short_test);
   const double span = (1024 - q.impacts[0].trigger_index) / 4096.0;
   EXPECT_NEAR(q.decay_rate, std::log(100.0) / span, 1e-9);
@@ -126,7 +126,7 @@ TEST(Impact, ImpactLevelSpreadRejected) {
     if (r.impact == 3)
       for (double& v : r.samples) v *= 2.5;
   std::vector<RecordSet> sets{{"t.unv", records}};
-  const ProcessedTest p = AnalyseImpacts(AssembleHammerTest(sets));
+  const ProcessedTest p = AnalyseImpacts(AssembleHammerMeasurement(sets));
   for (int k = 0; k < 5; ++k) EXPECT_EQ(p.impacts[k].accepted, k != 2);
   EXPECT_THAT(p.impacts[2].reason, HasSubstr("impact level"));
 }

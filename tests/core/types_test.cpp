@@ -5,6 +5,17 @@
 namespace ema {
 namespace {
 
+TEST(Direction, OneAxisTable) {
+  // AxisCode is the table DirectionName, ParseDirection and the UFF entity names share.
+  EXPECT_EQ(AxisCode("X"), 1);
+  EXPECT_EQ(AxisCode("rz"), 6);
+  EXPECT_EQ(AxisCode("+X"), 0);  // unsigned: the sign is the caller's
+  EXPECT_EQ(AxisCode("Q"), 0);
+  EXPECT_EQ(AxisCode("XR"), 0);
+  EXPECT_EQ(ParseDirection("-ry"), -5);
+  EXPECT_EQ(ParseDirection("+-X"), 0);
+}
+
 TEST(Direction, NamesRoundTrip) {
   for (int code : {1, 2, 3, 4, 5, 6, -1, -2, -3, -4, -5, -6}) {
     EXPECT_EQ(ParseDirection(DirectionName(code)), code) << DirectionName(code);

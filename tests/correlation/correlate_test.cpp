@@ -2,7 +2,10 @@
 // written by another tool read as model modes.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include "ema/core/error.hpp"
@@ -88,10 +91,71 @@ TEST(Correlate, PairsAgreementRemarksAndComac) {
   EXPECT_NE(md.find("model-only"), std::string::npos);
   EXPECT_NE(md.find("Shared DOFs: 12 of 13"), std::string::npos);
   const std::string csv = FormatCorrelationTable(r, TableFormat::kCsv);
-  EXPECT_NE(csv.find("1,100.0,95.0,0.40,95.0,5.3,1.000,\"paired\""), std::string::npos) << csv;
+  // No MPC/MPD/MCF on these test modes: empty cells.
+  EXPECT_NE(csv.find("1,100.0,95.0,0.40,95.0,5.3,1.000,,,,\"paired\""), std::string::npos) << csv;
   const std::string html = FormatCorrelationTable(r, TableFormat::kHtml);
   EXPECT_NE(html.find("<td>paired; interface-dominated</td>"), std::string::npos) << html;
   EXPECT_NE(html.find("<table>"), std::string::npos);
+}
+
+TEST(Correlate, TestModeComplexityWrittenReadAndTabulated) {
+  // Test mode 1 made complex on purpose: phi = [1, e^{j30°}] has MPC 0.75, MPD 15°, MCF 0.25
+  // (closed form; tests/curvefit/complexity_test.cpp computes them from the shape). Test mode 2
+  // is real: MPC 1, MPD 0, MCF 0. Written as UFF 55, read back, correlated, tabulated.
+  ModeSet model, test;
+  model.source = "model";
+  model.dofs = test.dofs = {{1, 3}, {2, 3}};
+  const double f[] = {100.0, 180.0};
+  const cd shapes_test[2][2] = {{1.0, std::polar(1.0, M_PI / 6.0)}, {1.0, -1.0}};
+  const cd shapes_model[2][2] = {{1.0, 1.0}, {1.0, -1.0}};
+  const double mpc[] = {0.75, 1.0}, mpd[] = {15.0, 0.0}, mcf[] = {0.25, 0.0};
+  for (int k = 0; k < 2; ++k) {
+    Mode m;
+    m.frequency_hz = f[k];
+    m.damping_ratio = 0.005;
+    m.pole = FrequencyAndDampingToPole(m.frequency_hz, m.damping_ratio);
+    m.shape = Eigen::VectorXcd(2);
+    m.shape << shapes_test[k][0], shapes_test[k][1];
+    m.mpc = mpc[k];
+    m.mpd = mpd[k];
+    m.mcf = mcf[k];
+    test.modes.push_back(m);
+    Mode mm;
+    mm.frequency_hz = f[k] * 1.02;
+    mm.shape = Eigen::VectorXcd(2);
+    mm.shape << shapes_model[k][0], shapes_model[k][1];
+    model.modes.push_back(mm);
+  }
+  const std::filesystem::path dir = std::filesystem::path(EMA_TEST_TMP_DIR);
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path file = dir / ("complex_test_modes-" + std::to_string(getpid()) + ".unv");
+  formats::WriteModeSet(file, test);
+  const ModeSet read = formats::ReadModeSet(file);
+  ASSERT_EQ(read.modes.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    // Written with 7 significant digits (1P E13.6): 1e-6 relative, plus 1e-12 for the zeros.
+    EXPECT_NEAR(read.modes[k].mpc, mpc[k], 1e-6 * mpc[k] + 1e-12) << k;
+    EXPECT_NEAR(read.modes[k].mpd, mpd[k], 1e-6 * mpd[k] + 1e-12) << k;
+    EXPECT_NEAR(read.modes[k].mcf, mcf[k], 1e-6 * mcf[k] + 1e-12) << k;
+  }
+  const CorrelationResult r = Correlate(read, model);
+  ASSERT_EQ(r.rows.size(), 2u);
+  ASSERT_TRUE(r.rows[0].paired());
+  EXPECT_EQ(r.rows[0].test_mode, 0);
+  EXPECT_NEAR(r.rows[0].test_mpc, 0.75, 1e-6);
+  EXPECT_NEAR(r.rows[0].test_mpd_deg, 15.0, 1e-5);
+  EXPECT_NEAR(r.rows[0].test_mcf, 0.25, 1e-6);
+  EXPECT_NEAR(r.rows[1].test_mpc, 1.0, 1e-6);
+
+  const std::string csv = FormatCorrelationTable(r, TableFormat::kCsv);
+  EXPECT_NE(csv.find(",mac,test_mpc,test_mpd_deg,test_mcf,remark\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",0.750,15.0,0.250,\"paired\""), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",1.000,0.0,0.000,\"paired\""), std::string::npos) << csv;
+  const std::string md = FormatCorrelationTable(r, TableFormat::kMarkdown);
+  EXPECT_NE(md.find("| MAC | MPC | MPD [°] | MCF | Remark |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 0.750 | 15.0 | 0.250 | paired |"), std::string::npos) << md;
+  const std::string html = FormatCorrelationTable(r, TableFormat::kHtml);
+  EXPECT_NE(html.find("<td>0.750</td><td>15.0</td><td>0.250</td>"), std::string::npos) << html;
 }
 
 TEST(Correlate, ComacPointsAtTheBadDof) {

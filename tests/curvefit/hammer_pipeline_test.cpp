@@ -2,7 +2,7 @@
 // decimation, noise) -> FRF estimation (H1, force/exponential windows) -> PolyMAX + LSFD.
 #include <gtest/gtest.h>
 
-#include "ema/acquisition/hammer_test.hpp"
+#include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/acquisition/simulator.hpp"
 #include "ema/curvefit/fit.hpp"
 #include "ema/frf/hammer_frf.hpp"
@@ -30,7 +30,7 @@ TEST(HammerPipeline, SimulatedTestRecoversTheModes) {
   plan.force_noise = 0.002;
   plan.seed = 42;
   const auto records = acquisition::SimulateHammerTest({truth}, plan);
-  const acquisition::HammerTest test = acquisition::AssembleHammerTest({acquisition::RecordSet{"sim", records}});
+  const acquisition::HammerMeasurement test = acquisition::AssembleHammerMeasurement({acquisition::RecordSet{"sim", records}});
   frf::FrfOptions frf_options;
   frf_options.band_hi_hz = 200.0;
   const FrfSet frfs = frf::EstimateFrfs(test, frf_options).frfs;

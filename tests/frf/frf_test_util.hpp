@@ -1,10 +1,10 @@
-// Helpers shared by the frf tests: a simulated 3-DOF hammer test turned into a HammerTest.
+// Helpers shared by the frf tests: a simulated 3-DOF hammer test turned into a HammerMeasurement.
 #pragma once
 
 #include <vector>
 
 #include "acquisition/three_dof.hpp"
-#include "ema/acquisition/hammer_test.hpp"
+#include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/acquisition/simulator.hpp"
 #include "ema/frf/hammer_frf.hpp"
 
@@ -32,7 +32,7 @@ inline std::vector<acquisition::RecordSet> ToRecordSets(std::vector<acquisition:
 
 inline frf::FrfResult SimulateAndEstimate(const acquisition::ModalTruth& truth, const acquisition::HammerTestPlan& plan,
                                           const frf::FrfOptions& options = {}) {
-  return frf::EstimateFrfs(acquisition::AssembleHammerTest(ToRecordSets(acquisition::SimulateHammerTestSets({truth}, plan))),
+  return frf::EstimateFrfs(acquisition::AssembleHammerMeasurement(ToRecordSets(acquisition::SimulateHammerTestSets({truth}, plan))),
                            options);
 }
 

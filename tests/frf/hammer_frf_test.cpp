@@ -46,7 +46,7 @@ TEST(HammerFrf, NoiseFreeEstimatorsAgreeWithAnalyticAccelerance) {
   // small accelerance near anti-resonances. A sign, scale or phase-convention error fails by far.
   const auto sys = testing::MakeThreeDof();
   const HammerTestPlan plan = LongPlan();
-  const auto test = acquisition::AssembleHammerTest(testing::ToRecordSets(acquisition::SimulateHammerTestSets({sys.truth}, plan)));
+  const auto test = acquisition::AssembleHammerMeasurement(testing::ToRecordSets(acquisition::SimulateHammerTestSets({sys.truth}, plan)));
   FrfOptions opt;
   const FrfResult h1 = EstimateFrfs(test, opt);
   opt.estimator = Estimator::kH2;
@@ -135,7 +135,7 @@ TEST(HammerFrf, H1LowWithForceNoiseH2HighWithResponseNoise) {
     plan.impacts_per_reference = 20;  // the bias stays, the random part averages down
     FrfOptions opt;
     opt.impact.force_window_pulses = 1e6;  // window open: the force noise stays in Gxx
-    const auto test = acquisition::AssembleHammerTest(testing::ToRecordSets(acquisition::SimulateHammerTestSets({sys.truth}, plan)));
+    const auto test = acquisition::AssembleHammerMeasurement(testing::ToRecordSets(acquisition::SimulateHammerTestSets({sys.truth}, plan)));
     const FrfResult h1 = EstimateFrfs(test, opt);
     opt.estimator = Estimator::kH2;
     const FrfResult h2 = EstimateFrfs(test, opt);
@@ -336,7 +336,7 @@ TEST(HammerFrf, SetWithDifferentReferenceIsAnError) {
   set2[0].name = "set2.unv";
   std::vector<acquisition::RecordSet> both{set1[0], set2[0]};
   try {
-    acquisition::AssembleHammerTest(both);
+    acquisition::AssembleHammerMeasurement(both);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("set2.unv"));
@@ -380,7 +380,7 @@ TEST(HammerFrf, BadInputNamesFileRecordAndReason) {
     sets[0].records[2].samples.resize(1000);
     sets[0].records[2].origin = "t.unv, dataset 58 #3";
     try {
-      acquisition::AssembleHammerTest(sets);
+      acquisition::AssembleHammerMeasurement(sets);
       FAIL();
     } catch (const InputError& e) {
       EXPECT_THAT(e.what(), HasSubstr("t.unv, dataset 58 #3"));
@@ -390,13 +390,13 @@ TEST(HammerFrf, BadInputNamesFileRecordAndReason) {
   {  // a different sample rate
     auto sets = good;
     sets[0].records[4].sample_interval_s *= 2;
-    EXPECT_THROW(acquisition::AssembleHammerTest(sets), InputError);
+    EXPECT_THROW(acquisition::AssembleHammerMeasurement(sets), InputError);
   }
   {  // a response with no impact (its force record missing), even by record order
     auto sets = good;
     sets[0].records.erase(sets[0].records.begin());
     try {
-      acquisition::AssembleHammerTest(sets);
+      acquisition::AssembleHammerMeasurement(sets);
       FAIL();
     } catch (const InputError& e) {
       EXPECT_THAT(e.what(), HasSubstr("no force record"));
@@ -407,7 +407,7 @@ TEST(HammerFrf, BadInputNamesFileRecordAndReason) {
     for (int k = 1; k <= 3; ++k) p.double_hits.push_back({0, 0, k, 4e-3, 0.4});
     const auto sets = testing::ToRecordSets(acquisition::SimulateHammerTestSets({sys.truth}, p));
     try {
-      EstimateFrfs(acquisition::AssembleHammerTest(sets));
+      EstimateFrfs(acquisition::AssembleHammerMeasurement(sets));
       FAIL();
     } catch (const InputError& e) {
       EXPECT_THAT(e.what(), HasSubstr("every impact"));
@@ -425,9 +425,9 @@ TEST(HammerFrf, ImpactsGroupedByRecordOrderWhenLoadCasesDoNotNumberThem) {
   plan.samples_per_record = 2048;
   plan.response_noise = 0.01;
   auto sets = testing::ToRecordSets(acquisition::SimulateHammerTestSets({sys.truth}, plan));
-  const FrfResult conventional = EstimateFrfs(acquisition::AssembleHammerTest(sets));
+  const FrfResult conventional = EstimateFrfs(acquisition::AssembleHammerMeasurement(sets));
   for (size_t i = 0; i < sets[0].records.size(); ++i) sets[0].records[i].impact = static_cast<int>(i) + 100;
-  const auto test = acquisition::AssembleHammerTest(sets);
+  const auto test = acquisition::AssembleHammerMeasurement(sets);
   EXPECT_TRUE(test.grouped_by_record_order);
   const FrfResult by_order = EstimateFrfs(test);
   EXPECT_EQ((by_order.frfs.h[0] - conventional.frfs.h[0]).norm(), 0.0);
@@ -439,7 +439,7 @@ TEST(HammerFrf, ThreadCountDoesNotChangeTheResult) {
   HammerTestPlan plan = testing::ThreeDofPlan();
   plan.samples_per_record = 2048;
   plan.response_noise = 0.01;
-  const auto test = acquisition::AssembleHammerTest(testing::ToRecordSets(acquisition::SimulateHammerTestSets({sys.truth}, plan)));
+  const auto test = acquisition::AssembleHammerMeasurement(testing::ToRecordSets(acquisition::SimulateHammerTestSets({sys.truth}, plan)));
   FrfOptions one, three;
   one.threads = 1;
   three.threads = 3;

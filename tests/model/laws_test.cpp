@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "ema/core/error.hpp"
-#include "ema/model/solve.hpp"
+#include "ema/model/laws.hpp"
 
 namespace ema::model {
 namespace {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "ema/acquisition/hammer_test.hpp"
+#include "ema/acquisition/hammer_measurement.hpp"
 
 namespace ema::acquisition {
 
@@ -33,7 +33,7 @@ struct ImpactOptions {
   double pretrigger_motion = 0.02;     ///< pre-trigger response rms above this × its peak = still moving
 };
 
-/// Findings for one impact (aligned with HammerTest::impacts).
+/// Findings for one impact (aligned with HammerMeasurement::impacts).
 struct ImpactAnalysis {
   int trigger_index = 0;          ///< first sample at or above trigger_level × peak
   double force_peak = 0.0;        ///< after DC removal, in the force unit
@@ -57,7 +57,7 @@ struct ProcessedTest {
 };
 
 /// Runs the detectors and gates on every impact and picks the exponential window.
-ProcessedTest AnalyseImpacts(const HammerTest& test, const ImpactOptions& options = {});
+ProcessedTest AnalyseImpacts(const HammerMeasurement& test, const ImpactOptions& options = {});
 
 /// Fills out[0..n) with the DC-free force record times the force window and the exponential window.
 void WindowForce(const TimeRecord& record, const ImpactAnalysis& analysis, double decay_rate, double* out);

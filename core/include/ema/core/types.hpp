@@ -29,15 +29,32 @@ struct Dof {
   friend auto operator<=>(const Dof&, const Dof&) = default;
 };
 
+/// Axis names of the UFF direction codes 1..6 (entry code - 1): the program's one axis table.
+inline constexpr std::string_view kAxisNames[] = {"X", "Y", "Z", "RX", "RY", "RZ"};
+
+/// The unsigned UFF direction code (1..6) of an axis name "X".."RZ", case-insensitive; 0 if unknown.
+inline int AxisCode(std::string_view axis) {
+  for (int i = 0; i < 6; ++i) {
+    const std::string_view name = kAxisNames[i];
+    if (axis.size() != name.size()) continue;
+    bool same = true;
+    for (size_t k = 0; k < name.size() && same; ++k) {
+      const char c = axis[k];
+      same = (c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c) == name[k];
+    }
+    if (same) return i + 1;
+  }
+  return 0;
+}
+
 /// "+X", "-Z", "+RY", "S" (scalar) for a UFF direction code.
 inline std::string DirectionName(int code) {
-  static const char* kAxis[] = {"X", "Y", "Z", "RX", "RY", "RZ"};
   // Built by appending: GCC 12 warns falsely (-Wrestrict) on `"literal" + std::string` when inlined.
   std::string name;
   if (code == 0) return name.assign("S");
   const int a = code < 0 ? -code : code;
   if (a > 6) return name.append("?").append(std::to_string(code));
-  return name.append(code < 0 ? "-" : "+").append(kAxis[a - 1]);
+  return name.append(code < 0 ? "-" : "+").append(kAxisNames[a - 1]);
 }
 
 /// Parses "+X", "X", "-z", "+RY" (case-insensitive) into a UFF direction code; 0 if unknown.
@@ -47,12 +64,7 @@ inline int ParseDirection(std::string_view text) {
     sign = text.front() == '-' ? -1 : 1;
     text.remove_prefix(1);
   }
-  std::string up;
-  for (char c : text) up += static_cast<char>(c >= 'a' && c <= 'z' ? c - 32 : c);
-  static const char* kAxis[] = {"X", "Y", "Z", "RX", "RY", "RZ"};
-  for (int i = 0; i < 6; ++i)
-    if (up == kAxis[i]) return sign * (i + 1);
-  return 0;
+  return sign * AxisCode(text);
 }
 
 inline std::string DofName(const Dof& dof) { return std::to_string(dof.node).append(DirectionName(dof.direction)); }

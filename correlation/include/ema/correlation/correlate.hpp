@@ -31,6 +31,11 @@ struct CorrelationRow {
   double agreement_pct = kNaN;        ///< 100 (1 − |f_m − f_t| / f_m)
   double frequency_error_pct = kNaN;  ///< (f_m − f_t) / f_t · 100
   double mac = kNaN;
+  /// The test mode's complexity as the fit computed it (Mode::mpc, mpd, mcf; NaN when the test
+  /// modes' file does not carry it): MPC 0..1 (1 = real), MPD [deg] (0 = real), MCF 0..1 (0 = real).
+  double test_mpc = kNaN;
+  double test_mpd_deg = kNaN;
+  double test_mcf = kNaN;
   std::string remark;                 ///< "paired", "test-only", "model-only" [+ "; interface-dominated"] [+ "; order swap"]
   bool paired() const { return test_mode >= 0 && model_mode >= 0; }
 };
@@ -61,8 +66,8 @@ CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const Cor
 
 enum class TableFormat { kMarkdown, kCsv, kHtml };
 
-/// The validation table (mode, model f, test f and damping, agreement %, Δf %, MAC, remark)
-/// followed by the COMAC list, as text in the requested format.
+/// The validation table (mode, model f, test f and damping, agreement %, Δf %, MAC, the test
+/// mode's MPC, MPD and MCF, remark) followed by the COMAC list, as text in the requested format.
 std::string FormatCorrelationTable(const CorrelationResult& result, TableFormat format);
 
 }  // namespace ema::correlation

@@ -1,4 +1,4 @@
-// Complexity of fitted modes: MPC, MPD and MCF with a pass/warn verdict per mode (the data-quality
+// Complexity of mode shapes: MPC, MPD and MCF, and a pass/warn verdict per mode (the data-quality
 // stage of `ema quality --modes`; the FRF checks are in ema/frf/quality.hpp). No file I/O.
 #pragma once
 
@@ -10,6 +10,11 @@
 #include "ema/frf/quality.hpp"
 
 namespace ema::curvefit {
+
+/// MPC (eigenvalue form, 0..1, 1 = real mode) and MPD (degrees, 0 = real mode), §4.4. NaN for
+/// a zero (MPC) or empty (MPD) shape.
+double ModalPhaseCollinearity(const Eigen::VectorXcd& shape);
+double MeanPhaseDeviationDeg(const Eigen::VectorXcd& shape);
 
 /// Mode complexity factor (pyEMA/sdypy: MCF): 1 - |phi^T phi|^2 / (phi^H phi)^2, i.e.
 /// 1 - ((Sxx - Syy)^2 + 4 Sxy^2) / (Sxx + Syy)^2 with Sxx = Re.Re, Syy = Im.Im, Sxy = Re.Im.

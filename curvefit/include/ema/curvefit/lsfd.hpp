@@ -33,8 +33,4 @@ struct LsfdResult {
 LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPole>& poles,
                               const LsfdOptions& options = {});
 
-/// MPC (eigenvalue form, 0..1, 1 = real mode) and MPD (degrees, 0 = real mode), §4.4.
-double ModalPhaseCollinearity(const Eigen::VectorXcd& shape);
-double MeanPhaseDeviationDeg(const Eigen::VectorXcd& shape);
-
 }  // namespace ema::curvefit

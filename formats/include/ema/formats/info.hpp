@@ -24,6 +24,8 @@ struct FileSummary {
   std::set<std::pair<std::int64_t, int>> reference_dofs;  ///< 58 reference (node, direction)
   std::set<std::int64_t> shape_nodes;        ///< nodes with 55 values
   int modes = 0;                             ///< 55 datasets with analysis type 2, 3 or 7
+  std::int64_t elements = 0;                 ///< 2412 elements
+  std::map<int, std::int64_t> element_descriptors;  ///< 2412 FE descriptor id -> element count
   struct Abscissa {
     double min = 0.0, max = 0.0;
     std::int64_t points_min = 0, points_max = 0;

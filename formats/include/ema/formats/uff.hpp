@@ -8,7 +8,8 @@
 //
 // Supported datasets: 151, 164, 15, 2411, 18, 2420, 82, 55, 58 (ASCII) and 58b (4/8-byte,
 // little and big endian). Anything else is kept verbatim as a RawDataset (with a note) so that
-// it survives a read/write round trip.
+// it survives a read/write round trip; 2412 (elements) and 2414 (analysis results) decode from
+// their RawDataset on demand (DecodeElements2412, Decode2414AsData55).
 #pragma once
 
 #include <array>
@@ -206,6 +207,34 @@ class Reader {
 /// nodes. False for other results (element data, static, stresses ...). Throws InputError naming
 /// `where` and the record for malformed records.
 bool Decode2414AsData55(const RawDataset& raw, const std::string& where, Data55* out);
+
+/// One element of dataset 2412.
+struct Element2412 {
+  std::int64_t label = 0;
+  int fe_descriptor = 0;  ///< FE descriptor id: 11 rod, 21-24 beams, 41/44 plane, 91/94 thin shell, 111 tetrahedron, ...
+  std::int64_t physical_property = 0;  ///< physical property table number
+  std::int64_t material_property = 0;  ///< material property table number
+  int colour = 0;
+  std::vector<std::int64_t> nodes;     ///< node labels, in the element's order
+  /// Beam-type elements only (HasBeamRecord2412): orientation node, fore- and aft-end cross
+  /// sections; 0 otherwise.
+  std::int64_t beam_orientation_node = 0;
+  std::int64_t beam_fore_cross_section = 0, beam_aft_cross_section = 0;
+};
+
+/// Dataset 2412: the elements of a mesh (test geometry lines and faces, FE meshes).
+struct Elements2412 {
+  std::vector<Element2412> elements;
+};
+
+/// True for the FE descriptors whose elements carry the beam record (rods, beams, pipes: 11,
+/// 21, 22, 23, 24, 31, 32).
+bool HasBeamRecord2412(int fe_descriptor);
+
+/// Dataset 2412 (kept as a RawDataset by the reader, so it is written back byte for byte) as its
+/// elements. `file` and `delimiter_line` (Dataset::line) place messages: InputError
+/// "file:line: dataset 2412 element L: ..." for a malformed record or a node list that ends early.
+Elements2412 DecodeElements2412(const RawDataset& raw, const std::string& file, std::int64_t delimiter_line);
 
 /// Reads every dataset of a file.
 std::vector<Dataset> ReadFile(const std::filesystem::path& path, ReadOptions options = {});

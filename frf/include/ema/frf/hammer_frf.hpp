@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "ema/acquisition/hammer_test.hpp"
+#include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/acquisition/impact.hpp"
 #include "ema/core/progress.hpp"
 #include "ema/core/types.hpp"
@@ -53,7 +53,7 @@ struct FrfResult {
 
 /// Estimates every FRF of the test. Throws InputError (file, record, reasons) when every impact
 /// of an FRF is rejected.
-FrfResult EstimateFrfs(const acquisition::HammerTest& test, const FrfOptions& options = {},
+FrfResult EstimateFrfs(const acquisition::HammerMeasurement& test, const FrfOptions& options = {},
                        const ProgressCallback& progress = {});
 
 }  // namespace ema::frf

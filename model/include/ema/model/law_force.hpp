@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "ema/model/model.hpp"
-#include "ema/model/solve.hpp"
+#include "ema/model/laws.hpp"
 
 namespace ema::model {
 

@@ -1,4 +1,5 @@
-// Operating-point solve, linearisation, assembly of M and K, and the generalised eigenproblem.
+// Operating-point solve, assembly of M and K, and the generalised eigenproblem (the laws
+// linearise in laws.hpp).
 //
 // DOF layout: 6 per body (ux uy uz rx ry rz at the body's centre, bodies in model order), then
 // the FE matrix rows in file order. A point r of a body moves u = u0 + theta x (r - centre).
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "ema/core/types.hpp"
+#include "ema/model/laws.hpp"
 #include "ema/model/model.hpp"
 
 namespace ema::model {
@@ -25,21 +27,6 @@ struct SolveOptions {
   /// (2 pi rigid_frequency_hz)^2.
   double rigid_tolerance = 1e-12;
   double rigid_frequency_hz = 1e-3;
-};
-
-/// The operating point and linearised stiffness of one spring (for --explain and diagnosis).
-struct SpringState {
-  std::string name;
-  std::string group;
-  std::string law;           ///< law kind name
-  double force = 0.0;        ///< N (N m for rotational), compression positive
-  double deflection = 0.0;   ///< compression of the whole law, m
-  double stiffness = 0.0;    ///< linearised stiffness incl. stiffness_factor, N/m
-  /// Series chains: solved air gap (NaN without air film) and each element's compression and
-  /// stiffness, in element order.
-  double gap = kNaN;
-  std::vector<double> element_deflections;
-  std::vector<double> element_stiffnesses;
 };
 
 /// Kinetic-energy share of each body (and "fe" for the FE part) in each mode.
@@ -79,11 +66,6 @@ struct Solution {
   /// all-free model). `ema model` prints them on stderr as "warning: ...".
   std::vector<std::string> warnings;
 };
-
-/// Operating point and linearised stiffness of one law. `override_value` (NaN = none) replaces
-/// the law's operating value. Throws InputError (with `where`) when there is no equilibrium or
-/// the operating point lies outside a table.
-SpringState LinearizeLaw(const Law& law, const std::string& where, double override_value = kNaN);
 
 /// Assembles M and K at the operating point of `options.setup`.
 System Assemble(const Model& model, const SolveOptions& options = {});

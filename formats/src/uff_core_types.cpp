@@ -1,4 +1,7 @@
-// File-level API: UFF 58/55/15 and CSV <-> core vocabulary types (see docs/formats.md).
+// UFF datasets <-> core vocabulary types (docs/formats.md): time records (58, type 1), FRF sets
+// (58, types 4 and 6) and mode sets (55 with 15/2411/2414 geometry and results). The entry points
+// of ema/formats/io.hpp; time data that is not UFF goes on to csv.cpp or mat.cpp, FRFs that are
+// not UFF to frf_table.cpp.
 #include "ema/formats/io.hpp"
 
 #include <algorithm>
@@ -532,13 +535,17 @@ ModeSet ReadModeSet(const std::filesystem::path& path) {
     } else {
       continue;  // static, transient, ... results are not modes
     }
-    const auto keys = EmaKeys(a->id[4]);
+    // Our metadata: f, zeta, umm on ID line 5; the complexity on ID line 4 (files written before
+    // it moved there carry mpc and mpd on line 5, which wins).
+    auto keys = EmaKeys(a->id[4]);
+    keys.merge(EmaKeys(a->id[3]));
     double v;
     if (GetDouble(keys, "f", &v)) m.frequency_hz = v;
     if (GetDouble(keys, "zeta", &v)) m.damping_ratio = v;
     if (keys.count("f") || keys.count("zeta")) m.pole = FrequencyAndDampingToPole(m.frequency_hz, m.damping_ratio);
     if (GetDouble(keys, "mpc", &v)) m.mpc = v;
     if (GetDouble(keys, "mpd", &v)) m.mpd = v;
+    if (GetDouble(keys, "mcf", &v)) m.mcf = v;
     if (GetDouble(keys, "umm", &v)) m.unit_modal_mass = v != 0.0;
     const bool cplx = a->IsComplex();
     int ndirs = a->ndv;
@@ -656,10 +663,14 @@ void WriteModeSet(const std::filesystem::path& path, const ModeSet& modes, const
     char f5[160];
     std::snprintf(f5, sizeof f5, "ema f=%.12g zeta=%.12g", m.frequency_hz, m.damping_ratio);
     std::string id5 = f5;
-    if (std::isfinite(m.mpc)) id5 += " mpc=" + uff::FormatE(m.mpc, 0, 6);
-    if (std::isfinite(m.mpd)) id5 += " mpd=" + uff::FormatE(m.mpd, 0, 6);
     if (m.unit_modal_mass) id5 += " umm=1";
-    a.id = {"ema mode " + std::to_string(k), modes.source.empty() ? "NONE" : modes.source, now, "mode " + std::to_string(k), id5};
+    // The complexity has its own ID line: beside f and zeta (12 digits each) it would pass the
+    // 80 columns of an ID line. 7 digits: the tables print MPC/MCF to 3 decimals, MPD to 0.1 deg.
+    std::string id4 = "ema mode=" + std::to_string(k);
+    if (std::isfinite(m.mpc)) id4 += " mpc=" + uff::FormatE(m.mpc, 0, 6);
+    if (std::isfinite(m.mpd)) id4 += " mpd=" + uff::FormatE(m.mpd, 0, 6);
+    if (std::isfinite(m.mcf)) id4 += " mcf=" + uff::FormatE(m.mcf, 0, 6);
+    a.id = {"ema mode " + std::to_string(k), modes.source.empty() ? "NONE" : modes.source, now, id4, id5};
     a.model_type = 1;
     a.analysis_type = 3;
     a.data_characteristic = six ? 3 : 2;

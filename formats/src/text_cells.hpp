@@ -1,5 +1,5 @@
-// Small text helpers shared by the text readers (CSV time data, FRF tables, .mat channel names):
-// trimming, case folding, splitting at a separator, and the DOF text `101+Z` / `101:+Z`.
+// The cells of the text tables (CSV time data, FRF tables, .mat channel names): trimming, case
+// folding, splitting a line into cells at a separator, and the DOF text `101+Z` / `101:+Z`.
 #pragma once
 
 #include <cctype>

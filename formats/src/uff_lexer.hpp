@@ -1,4 +1,6 @@
-// Internal helpers of the UFF reader/writer (not installed).
+// The UFF lexer (uff_lexer.cpp; not installed): trimming, tokens, column slices, delimiter lines
+// and the buffered input file, shared by the reader and the writer. The number parsers
+// (ParseReal, ParseInteger) are public in ema/formats/uff.hpp.
 #pragma once
 
 #include <cstdint>
@@ -16,6 +18,16 @@ bool IsValidUtf8(std::string_view s);
 bool IsDelimiterLine(std::string_view line);
 /// Whitespace tokens; with split_signs also splits run-together numbers (spec §12.9 step 3).
 std::vector<std::string_view> Tokens(std::string_view line, bool split_signs);
+
+/// The integers of a record line, blank-separated; a token longer than `width` characters is
+/// fields of `width` columns run together and is split at those columns. Throws InputError
+/// (where, what + ": 'x' is not an integer"), and when fewer than `need` are found
+/// (what + ": expected at least N integers, got M").
+std::vector<std::int64_t> LineIntegers(std::string_view line, const std::string& where, const std::string& what,
+                                       size_t need = 0, int width = 10);
+/// The reals of a record line, blank-separated, run-together numbers split (spec §12.9); throws
+/// InputError(where, what + ": 'x' is not a number").
+std::vector<double> LineReals(std::string_view line, const std::string& where, const std::string& what);
 
 struct Columns {
   /// 1-based inclusive columns; blanks (empty) past the end; UTF-8 lines sliced by code points.

@@ -1,4 +1,4 @@
-#include "ema/acquisition/hammer_test.hpp"
+#include "ema/acquisition/hammer_measurement.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -95,8 +95,8 @@ std::optional<std::vector<LocalImpact>> GroupByOrder(const RecordSet& set) {
 
 }  // namespace
 
-HammerTest AssembleHammerTest(std::vector<RecordSet> sets) {
-  HammerTest test;
+HammerMeasurement AssembleHammerMeasurement(std::vector<RecordSet> sets) {
+  HammerMeasurement test;
   if (sets.empty()) throw InputError("", "no time records given");
   std::vector<std::vector<Dof>> set_refs(sets.size()), set_outputs(sets.size());
   std::string first_where;

@@ -1,4 +1,5 @@
-// A hammer test = reference DOFs × roving sets × impacts, assembled from time records.
+// A hammer measurement = reference DOFs × roving sets × impacts, assembled from the time records
+// of a hammer test.
 //
 // Grouping rule (docs/frf.md):
 //  1. Within one file (one roving set), records are grouped by (reference DOF, impact number)
@@ -30,14 +31,14 @@ struct RecordSet {
 
 /// One impact: a force record and the response records acquired with it.
 struct Impact {
-  int set = 0;                ///< index into HammerTest::set_names
+  int set = 0;                ///< index into HammerMeasurement::set_names
   Dof reference;              ///< hammer DOF
   int number = 0;             ///< impact number as read (load case id), or its order in the file (rule 2)
-  int force = -1;             ///< index into HammerTest::records
-  std::vector<int> responses; ///< indices into HammerTest::records
+  int force = -1;             ///< index into HammerMeasurement::records
+  std::vector<int> responses; ///< indices into HammerMeasurement::records
 };
 
-struct HammerTest {
+struct HammerMeasurement {
   std::vector<std::string> set_names;
   std::vector<TimeRecord> records;
   std::vector<Impact> impacts;
@@ -53,6 +54,6 @@ struct HammerTest {
 /// Assembles the test. Throws InputError naming the file, the record and the reason for: a
 /// response with no force record for its impact, two force records for one impact, records of
 /// different sample intervals or lengths, no records, a set with a different reference.
-HammerTest AssembleHammerTest(std::vector<RecordSet> sets);
+HammerMeasurement AssembleHammerMeasurement(std::vector<RecordSet> sets);
 
 }  // namespace ema::acquisition
