@@ -699,8 +699,9 @@ bool Reader::Impl::Next(Dataset* ds) {
       RawDataset r;
       r.lines = std::move(raw);
       for (auto& l : body.lines) r.lines.push_back(std::move(l));
-      // 2412 (elements) decodes on demand (DecodeElements2412, `ema info` counts them): no note.
-      if (number != 2412) ds->notes.push_back("dataset " + std::to_string(number) + " is not decoded; kept verbatim");
+      // 2412 (elements, DecodeElements2412) and 2414 (analysis results, ReadModeSet's FE modes)
+      // decode on demand: no note.
+      if (number != 2412 && number != 2414) ds->notes.push_back("dataset " + std::to_string(number) + " is not decoded; kept verbatim");
       ds->body = std::move(r);
     }
   }
