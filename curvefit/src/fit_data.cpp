@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <vector>
 
 #include "ema/core/error.hpp"
 
@@ -90,9 +91,16 @@ FitData PrepareFitData(const FrfSet& frfs, const FitDataOptions& options, const 
                                    " in the band (polyreference fitting needs every output from every reference)");
     }
   }
+  // Column by column (the matrix is column-major: a row walk strides through all of it).
+  std::vector<char> line_finite(static_cast<size_t>(n), 1);
+  for (int c = 0; c < l * m; ++c) {
+    const std::complex<double>* col = d.h.col(c).data();
+    for (int k = 0; k < n; ++k)
+      if (!std::isfinite(col[k].real()) || !std::isfinite(col[k].imag())) line_finite[k] = 0;
+  }
   int bad = 0, run = 0, longest = 0, first_bad = -1;
   for (int k = 0; k < n; ++k) {
-    const bool finite = d.h.row(k).allFinite();
+    const bool finite = line_finite[k] != 0;
     if (!finite) {
       d.line_weight[k] = 0.0;
       d.h.row(k).setZero();

@@ -12,7 +12,9 @@ ModeSet PeakPick(const FitData& data, const PeakOptions& options) {
   const int n = data.LineCount(), l = data.OutputCount(), m = data.ReferenceCount();
   Eigen::VectorXd s = Eigen::VectorXd::Zero(n);
   for (int o = 0; o < l; ++o)
-    for (int i = 0; i < m; ++i) s += data.h.col(o * m + i).cwiseAbs() * data.output_weight[o];
+    // |H| as sqrt(re² + im²), vectorised: hypot's overflow guard is not needed for FRF values
+    // and costs a tenth of a large file's whole fit.
+    for (int i = 0; i < m; ++i) s += data.h.col(o * m + i).cwiseAbs2().cwiseSqrt() * data.output_weight[o];
   ModeSet set;
   set.dofs = data.outputs;
   auto valid = [&](int k) { return data.line_weight[k] > 0.0; };

@@ -312,11 +312,12 @@ FrfSet ReadFrfSet(const std::filesystem::path& path) {
     index_of(set.references, {static_cast<int>(it.f.reference_node), it.f.reference_direction});
   }
   const std::complex<double> nan_c(kNaN, kNaN);
-  set.h.assign(set.references.size(), Eigen::MatrixXcd::Constant(lines, set.OutputCount(), nan_c));
+  set.h.resize(set.references.size());  // each block filled in place (no temporary to copy)
+  for (Eigen::MatrixXcd& block : set.h) block.setConstant(lines, set.OutputCount(), nan_c);
   bool quantity_set = false;
   std::map<std::pair<int, int>, int> averages;
-  for (const auto& it : frfs) {
-    const Function58& f = it.f;
+  for (auto& it : frfs) {
+    Function58& f = it.f;
     const std::string where = path.string() + ":" + std::to_string(it.line);
     if (!f.IsComplex()) throw InputError(where, "dataset 58 record 7 field 1: an FRF must be complex (type 5 or 6)");
     const int o = index_of(set.outputs, {static_cast<int>(f.response_node), f.response_direction});
@@ -338,6 +339,7 @@ FrfSet ReadFrfSet(const std::filesystem::path& path) {
     if (GetDouble(keys, "averages", &v)) averages[{r, o}] = static_cast<int>(v);
     if (GetDouble(keys, "window_decay", &v)) set.window_decay_rate = v;
     if (GetDouble(keys, "roving_hammer", &v)) set.roving_hammer = v != 0.0;
+    std::vector<double>().swap(f.y);  // copied: its memory serves the next stage, not a second copy
   }
   if (!averages.empty()) {
     set.averages = Eigen::MatrixXi::Zero(set.ReferenceCount(), set.OutputCount());
