@@ -206,11 +206,19 @@ def run_one(ema, index, seed, work, keep):
 
 
 def parse_range(text):
-    """"0:200" -> range(0, 200); "7" -> range(7, 8)."""
-    if ":" in text:
-        a, b = text.split(":")
-        return range(int(a), int(b))
-    return range(int(text), int(text) + 1)
+    """Case indices: "0:200" (200 excluded), "0:200:8" (every 8th), "7", or a comma list of these."""
+    out = []
+    for part in text.split(","):
+        fields = [int(f) for f in part.split(":")]
+        if len(fields) == 1:
+            out.append(fields[0])
+        elif len(fields) in (2, 3):
+            out += list(range(*fields))
+        else:
+            raise SystemExit(f"bench.py: --cases {text!r}: expected A:B, A:B:STEP or an index")
+    if not out or min(out) < 0:
+        raise SystemExit(f"bench.py: --cases {text!r} selects no case")
+    return sorted(set(out))
 
 
 def run_range(args):
@@ -219,7 +227,7 @@ def run_range(args):
         sys.exit(2)
     ema = os.path.abspath(args.ema)
     os.makedirs(os.path.join(args.work, "scores"), exist_ok=True)
-    indices = list(parse_range(args.cases))
+    indices = parse_range(args.cases)
     start = time.monotonic()
     results = []
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
@@ -233,8 +241,8 @@ def run_range(args):
                   + ("" if r["right"] or "error" in r else f" (rank 1 {r['rank1']['kind']}:{r['rank1']['target']})"),
                   flush=True)
     wall = time.monotonic() - start
-    with open(os.path.join(args.work, f"wall-{indices[0]}-{indices[-1]}.json"), "w") as f:
-        json.dump({"cases": args.cases, "jobs": args.jobs, "wall_seconds": wall}, f)
+    with open(os.path.join(args.work, f"wall-{args.cases.replace(':', '-').replace(',', '_')}.json"), "w") as f:
+        json.dump({"cases": args.cases, "count": len(indices), "jobs": args.jobs, "wall_seconds": wall}, f)
     print(f"{len(results)} cases in {wall:.0f} s with --jobs {args.jobs}")
     return results
 
@@ -245,7 +253,8 @@ def main():
     for name in ("run", "check"):
         q = sub.add_parser(name)
         q.add_argument("--ema", required=True, help="the built ema executable")
-        q.add_argument("--cases", default="0:200", help="index range A:B (B excluded) or one index")
+        q.add_argument("--cases", default="0:200",
+                       help="case indices: A:B (B excluded), A:B:STEP, one index, or a comma list")
         q.add_argument("--jobs", type=int, default=1, help="cases run at once (default 1)")
         q.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"benchmark seed (default {DEFAULT_SEED})")
         q.add_argument("--work", default="diagnosis-benchmark-work", help="folder for cases and scores")

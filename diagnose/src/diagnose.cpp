@@ -111,10 +111,11 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
       // shape at 1 − MAC = 0.26 weighs as 26 σ and spurious effects are "found" to reshape it.
       const double complexity = 1.0 - detail::PhaseCollinearity(s.test_shapes.col(i));
       s.sigma_shape(i) = std::hypot(options.shape_sigma, std::max(0.0, complexity));
-      // Two model modes closer than about the half-power width ζ·f cannot be told apart by a
-      // hammer test: the fitted shape is some blend of them, judged against their span (BlendMac).
+      // Two model modes closer than the half-power bandwidth 2ζf (modal overlap > 1) are one
+      // subspace to a hammer test: which basis of it the test returns depends on asymmetries no
+      // model holds, so the fitted shape is judged against their span (BlendMac).
       const double zeta = std::isfinite(m.damping_ratio) ? std::max(m.damping_ratio, 1e-3) : 1e-3;
-      s.half_power_hz(i) = zeta * m.frequency_hz;
+      s.half_power_hz(i) = 2.0 * zeta * m.frequency_hz;
     }
     s.model_dof_count = sol.modes.dofs.size();
     setups.push_back(std::move(s));

@@ -81,7 +81,7 @@ struct SetupData {
   Eigen::VectorXd test_hz;
   Eigen::VectorXd sigma_hz;  ///< 1σ of each test frequency
   Eigen::VectorXd sigma_shape;  ///< 1σ of each test mode's (1 − MAC)
-  Eigen::VectorXd half_power_hz;  ///< ζ·f of each test mode: model modes closer than this blend
+  Eigen::VectorXd half_power_hz;  ///< 2ζf of each test mode: model modes closer than this blend
   size_t model_dof_count = 0;
 };
 
@@ -119,7 +119,7 @@ double PhaseCollinearity(const Eigen::VectorXcd& shape);
 
 /// The MAC a test shape is judged by against model mode `j`: its MAC with `j`, raised toward its
 /// MAC with the subspace of `j` and the model modes too close to `j` for a hammer test to
-/// separate (weight exp(−(Δf / half_power_hz)²) of the closest one).
+/// separate (weight exp(−(Δf / half-power bandwidth)²) of the closest one).
 double BlendMac(const Eigen::VectorXcd& test_shape, const Eigen::MatrixXcd& model_shapes, const Eigen::VectorXd& model_hz,
                 int j, double plain_mac, double half_power_hz);
 
