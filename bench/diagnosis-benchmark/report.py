@@ -64,7 +64,7 @@ def svg(bins, brier, n):
     X = lambda p: left + p * size
     Y = lambda p: h - bottom - p * size
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" '
-           'font-family="sans-serif" font-size="12">',
+           'font-family="monospace" font-size="12">',
            f'<rect x="0" y="0" width="{w}" height="{h}" fill="white"/>',
            f'<text x="{w / 2}" y="22" text-anchor="middle" font-size="14">Calibration of rank 1 ({n} cases, '
            f'Brier {brier:.3f})</text>']
@@ -89,7 +89,15 @@ def svg(bins, brier, n):
         out.append(f'<line x1="{x}" y1="{y1}" x2="{x}" y2="{y2}" stroke="#245"/>')
         out.append(f'<circle cx="{x}" cy="{y}" r="{3 + 2 * math.sqrt(b["n"]) / 2:.1f}" fill="#357" '
                    'fill-opacity="0.6" stroke="#123"/>')
-        out.append(f'<text x="{x - 8}" y="{y - 10}" text-anchor="end">n={b["n"]}</text>')
+    # The counts in a small table in the empty lower-right corner (the points crowd near 1).
+    rows = [b for b in bins if b["n"]]
+    tx, ty = X(1.0) - 206, Y(0.0) - 16 * (len(rows) + 1) - 10
+    out.append(f'<rect x="{tx - 4}" y="{ty - 13}" width="206" height="{16 * (len(rows) + 1) + 4}" fill="white" '
+               'stroke="#ccc"/>')
+    out.append(f'<text x="{tx}" y="{ty}" font-weight="bold" xml:space="preserve">bin          n  said  right</text>')
+    for k, b in enumerate(rows, start=1):
+        out.append(f'<text x="{tx}" y="{ty + 16 * k}" xml:space="preserve">{b["lo"]:.2f}–{b["hi"]:.2f} '
+                   f'{b["n"]:4d} {b["mean_predicted"]:.3f} {b["observed"]:.3f}</text>')
     out.append("</svg>")
     return "\n".join(out) + "\n"
 
