@@ -95,6 +95,8 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
     const auto n = static_cast<Eigen::Index>(t.modes.modes.size());
     s.test_hz.resize(n);
     s.sigma_hz.resize(n);
+    s.sigma_shape.resize(n);
+    s.half_power_hz.resize(n);
     for (Eigen::Index i = 0; i < n; ++i) {
       const Mode& m = t.modes.modes[static_cast<size_t>(i)];
       s.test_hz(i) = m.frequency_hz;
@@ -103,6 +105,17 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
                               : std::isfinite(m.frequency_spread_hz) ? m.frequency_spread_hz
                                                                      : 0.0;
       s.sigma_hz(i) = std::max(measured, options.frequency_floor * m.frequency_hz);
+      // How well its shape was measured: the model's modes are real (modal damping), so a test
+      // shape that is not (MPC < 1: two close modes fitted as one, a pole polluted by noise)
+      // differs from any model mode by 1 − MAC of the order of 1 − MPC. Without this, a blended
+      // shape at 1 − MAC = 0.26 weighs as 26 σ and spurious effects are "found" to reshape it.
+      const double complexity = 1.0 - detail::PhaseCollinearity(s.test_shapes.col(i));
+      s.sigma_shape(i) = std::hypot(options.shape_sigma, std::max(0.0, complexity));
+      // Two model modes closer than the half-power bandwidth 2ζf (modal overlap > 1) are one
+      // subspace to a hammer test: which basis of it the test returns depends on asymmetries no
+      // model holds, so the fitted shape is judged against their span (BlendMac).
+      const double zeta = std::isfinite(m.damping_ratio) ? std::max(m.damping_ratio, 1e-3) : 1e-3;
+      s.half_power_hz(i) = 2.0 * zeta * m.frequency_hz;
     }
     s.model_dof_count = sol.modes.dofs.size();
     setups.push_back(std::move(s));

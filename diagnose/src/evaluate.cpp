@@ -1,6 +1,8 @@
 // Residuals of one model variant against every setup's test modes: per test mode, the frequency
 // error in units of that mode's σ and (1 − MAC) in units of the shape σ. Pairing is redone at
 // every evaluation, so mode swaps while the parameters move are followed.
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 #include "ema/core/error.hpp"
@@ -10,6 +12,40 @@
 #include "internal.hpp"
 
 namespace ema::diagnose::detail {
+
+double PhaseCollinearity(const Eigen::VectorXcd& shape) {
+  const double sxx = shape.real().squaredNorm(), syy = shape.imag().squaredNorm();
+  const double sxy = shape.real().dot(shape.imag());
+  const double total = sxx + syy;
+  if (!(total > 0.0)) return 0.0;
+  return ((sxx - syy) * (sxx - syy) + 4.0 * sxy * sxy) / (total * total);
+}
+
+double BlendMac(const Eigen::VectorXcd& test_shape, const Eigen::MatrixXcd& model_shapes, const Eigen::VectorXd& model_hz,
+                int j, double plain_mac, double half_power_hz) {
+  if (!(half_power_hz > 0.0)) return plain_mac;
+  // Neighbours of j whose weight matters (within 3 half-power widths).
+  std::vector<Eigen::Index> cols{j};
+  double weight = 0.0;
+  for (Eigen::Index k = 0; k < model_hz.size(); ++k) {
+    if (k == j) continue;
+    const double z = (model_hz(k) - model_hz(j)) / half_power_hz;
+    if (std::abs(z) > 3.0) continue;
+    cols.push_back(k);
+    weight = std::max(weight, std::exp(-z * z));
+  }
+  if (cols.size() == 1) return plain_mac;
+  Eigen::MatrixXcd basis(model_shapes.rows(), static_cast<Eigen::Index>(cols.size()));
+  for (size_t c = 0; c < cols.size(); ++c) basis.col(static_cast<Eigen::Index>(c)) = model_shapes.col(cols[c]);
+  const double norm = test_shape.squaredNorm();
+  if (!(norm > 0.0)) return plain_mac;
+  // Share of the test shape inside the span of the close model modes: bᴴ G⁺ b / φᴴφ.
+  const Eigen::VectorXcd b = basis.adjoint() * test_shape;
+  const Eigen::MatrixXcd gram = basis.adjoint() * basis;
+  const Eigen::VectorXcd x = gram.completeOrthogonalDecomposition().solve(b);
+  const double subspace = std::clamp(std::real(b.dot(x)) / norm, 0.0, 1.0);
+  return plain_mac + weight * std::max(0.0, subspace - plain_mac);
+}
 
 double Huber(double s, double a) { return s <= a * a ? s : 2.0 * a * std::sqrt(s) - a * a; }
 
@@ -61,14 +97,16 @@ Evaluation Evaluator::Evaluate(const std::vector<model::Effect>& effects) {
           c.agreement_pct = correlation::AgreementPct(model_hz(j), s.test_hz(i));
           c.mac = mac(i, j);
           out.r(row) = (model_hz(j) - s.test_hz(i)) / s.sigma_hz(i);
-          out.r(row + 1) = (1.0 - mac(i, j)) / options_.shape_sigma;
+          const double judged =
+              BlendMac(s.test_shapes.col(i), model_shapes, model_hz, j, mac(i, j), s.half_power_hz(i));
+          out.r(row + 1) = (1.0 - judged) / s.sigma_shape(i);
           sum_err += 100.0 * std::abs(model_hz(j) - s.test_hz(i)) / s.test_hz(i);
           sum_mac += mac(i, j);
           sum_agreement += c.agreement_pct;
           ++out.paired;
         } else {
           out.r(row) = options_.unpaired_frequency_residual * s.test_hz(i) / s.sigma_hz(i);
-          out.r(row + 1) = 1.0 / options_.shape_sigma;
+          out.r(row + 1) = 1.0 / s.sigma_shape(i);
         }
         row += 2;
         out.modes.push_back(c);

@@ -80,6 +80,8 @@ struct SetupData {
   Eigen::MatrixXcd test_shapes;
   Eigen::VectorXd test_hz;
   Eigen::VectorXd sigma_hz;  ///< 1σ of each test frequency
+  Eigen::VectorXd sigma_shape;  ///< 1σ of each test mode's (1 − MAC)
+  Eigen::VectorXd half_power_hz;  ///< 2ζf of each test mode: model modes closer than this blend
   size_t model_dof_count = 0;
 };
 
@@ -111,6 +113,15 @@ class Evaluator {
   int residual_count_ = 0;
   int solves_ = 0;
 };
+
+/// Modal phase collinearity of a complex shape (1 = a real mode up to one phase, 0 = circular).
+double PhaseCollinearity(const Eigen::VectorXcd& shape);
+
+/// The MAC a test shape is judged by against model mode `j`: its MAC with `j`, raised toward its
+/// MAC with the subspace of `j` and the model modes too close to `j` for a hammer test to
+/// separate (weight exp(−(Δf / half-power bandwidth)²) of the closest one).
+double BlendMac(const Eigen::VectorXcd& test_shape, const Eigen::MatrixXcd& model_shapes, const Eigen::VectorXd& model_hz,
+                int j, double plain_mac, double half_power_hz);
 
 /// Huber cost of one mode's residual pair (s = squared norm): s for s ≤ a², 2a√s − a² beyond.
 double Huber(double s, double a);

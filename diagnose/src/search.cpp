@@ -12,6 +12,15 @@
 // of its effects is dropped in turn and the rest re-fitted, so a confounder picked first (a
 // body mass standing in for a joint compliance) leaves the set when the true pair is in. Growth
 // stops at `max_effects` or when no larger set beats the best smaller one.
+//
+// Swap: the backward check only drops effects, so a set that holds a look-alike of a true effect
+// (a series layer for a stiffness factor on the same mount, a mass on all points for one at a
+// single point, the other body's mass) plus a third effect patching the difference is never
+// turned into the true pair. The best set of each size ≥ 2 therefore has each effect replaced in
+// turn by its look-alikes (any kind on the same spring group or its members; any mass effect for
+// a mass effect; the same kind on another body), screened with the rest held, the best
+// `additions` / 2 re-fitted and checked backward. Found by the diagnosis benchmark
+// (docs/diagnosis-benchmark.md).
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -30,6 +39,16 @@ bool Plausible(const Problem& problem, const Fit& f) {
     if (end != 0) return false;  // at the far end: implausible; at the absent end: not wanted
   }
   return true;
+}
+
+// Effects the data may confuse with each other (see "Swap" above).
+bool LookAlike(const Atom& a, const Atom& b) {
+  if (!a.group.empty() || !b.group.empty()) return a.group == b.group;
+  const auto mass = [](const Atom& t) {
+    return t.info->kind == model::EffectKind::kAddedMass || t.info->kind == model::EffectKind::kMassScale;
+  };
+  if (mass(a) || mass(b)) return mass(a) && mass(b);
+  return a.info->kind == b.info->kind;
 }
 
 bool Compatible(const std::vector<Atom>& atoms, const std::vector<int>& set, int candidate) {
@@ -231,6 +250,48 @@ SearchResult Search(Problem* p, const DiagnoseOptions& options) {
     const auto best = best_of_size(size, 1);
     if (best.empty() || !(best.front()->score < best_so_far)) break;
     best_so_far = best.front()->score;
+  }
+  // Swap (see the top of the file).
+  std::vector<Fit> tops;
+  for (int size = 2; options.swaps && size <= options.max_effects; ++size)
+    for (const Fit* f : best_of_size(size, 1)) tops.push_back(*f);
+  for (const Fit& top : tops) {
+    for (size_t k = 0; k < top.atoms.size(); ++k) {
+      std::vector<int> rest;
+      std::vector<double> rest_theta;
+      for (size_t i = 0; i < top.atoms.size(); ++i)
+        if (i != k) {
+          rest.push_back(top.atoms[i]);
+          rest_theta.push_back(top.theta[i]);
+        }
+      std::vector<std::pair<double, std::pair<int, double>>> swaps;
+      for (int c = 0; c < total; ++c) {
+        if (c == top.atoms[k] || !LookAlike(atoms[top.atoms[k]], atoms[c]) || !Compatible(atoms, top.atoms, c)) continue;
+        progress("screening swaps");
+        const auto [obj, theta] = Screen(p, rest, rest_theta, c, std::max(5, options.scan_points - 2));
+        if (std::isfinite(obj)) swaps.push_back({obj, {c, theta}});
+      }
+      std::sort(swaps.begin(), swaps.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      if (static_cast<int>(swaps.size()) > std::max(1, options.additions / 2)) swaps.resize(std::max(1, options.additions / 2));
+      for (const auto& [obj, swap] : swaps) {
+        std::vector<int> set = rest;
+        std::vector<double> theta = rest_theta;
+        set.push_back(swap.first);
+        theta.push_back(swap.second);
+        const Fit swapped = fit(set, theta);
+        if (!swapped.ok) continue;
+        for (size_t drop = 0; drop < swapped.atoms.size(); ++drop) {
+          std::vector<int> sub;
+          std::vector<double> sub_theta;
+          for (size_t i = 0; i < swapped.atoms.size(); ++i)
+            if (i != drop) {
+              sub.push_back(swapped.atoms[i]);
+              sub_theta.push_back(swapped.theta[i]);
+            }
+          fit(sub, sub_theta);
+        }
+      }
+    }
   }
   for (auto& [set, f] : fitted) result.fits.push_back(std::move(f));
   return result;

@@ -64,6 +64,9 @@ struct DiagnoseOptions {
   int max_effects = 3;
   int beam = 3;
   int additions = 4;
+  /// Swap move after the combinations: each effect of the best set of each size replaced by its
+  /// look-alikes (docs/diagnose.md), re-fitted and checked backward.
+  bool swaps = true;
   int max_iterations = 30;
   ProgressCallback progress;
 

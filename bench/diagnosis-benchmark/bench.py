@@ -1,0 +1,286 @@
+#!/usr/bin/env python3
+"""The diagnosis benchmark: how often is `ema diagnose` right? (docs/diagnosis-benchmark.md)
+
+  bench.py run    --ema EMA --cases 0:200 [--jobs N] [--seed S] [--work DIR]
+  bench.py gather --work DIR [--doc docs/diagnosis-benchmark.md --svg docs/img/diagnosis-calibration.svg]
+  bench.py check  --ema EMA --cases 0:21 --floor 0.9 [--work DIR]      (the CI test)
+
+`run` generates each case (cases.py), puts it through the real chain with the built `ema`
+(simulate -> frf -> fit -> diagnose -> correlate) and writes WORK/scores/case-NNNN.json; cases
+are independent, so one index range per scheduler task works as well as --jobs on one machine.
+`gather` merges the per-case score files into WORK/scores.json, prints the tables and, with
+--doc, replaces the generated section of the markdown page and writes the calibration SVG.
+Standard library only.
+"""
+
+import argparse
+import concurrent.futures
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree (CI runs it from there)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cases  # noqa: E402
+import report  # noqa: E402
+
+DEFAULT_SEED = 2026
+PARAMETER_TOLERANCE = 0.10   # the issue's "parameters within 10 %"
+AGREEMENT_GOAL = 99.0        # mean agreement (%) of the updated model, as in the acceptance tests
+
+
+class StepFailed(Exception):
+    pass
+
+
+def run_ema(ema, args, folder, log):
+    """Runs `ema ARGS` in folder; stdout+stderr to folder/log. Raises StepFailed on exit != 0."""
+    start = time.monotonic()
+    with open(os.path.join(folder, log), "w") as out:
+        rc = subprocess.call([ema] + args, cwd=folder, stdout=out, stderr=subprocess.STDOUT)
+    if rc != 0:
+        with open(os.path.join(folder, log)) as f:
+            tail = f.read()[-800:]
+        raise StepFailed(f"ema {args[0]} exited {rc}: {tail.strip()}")
+    return time.monotonic() - start
+
+
+def read_json(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def choose_band(frequencies, family, damping):
+    """Band, sample rate and record length of the test from the truth's modes: the modes a
+    hammer test of this article would be fitted over (rigid articles: below 2 kHz; the beam: its
+    first six), the band edges half-way to the next mode, and a frequency line spacing of at
+    most the lowest mode's damping times its frequency (two lines in its half-power band)."""
+    f = sorted(x for x in frequencies if x > 1.0)
+    keep = [x for x in f if x < 2000.0] if family != "fe" else [x for x in f if x < 2500.0][:6]
+    if len(keep) < 2:
+        keep = f[:2]
+    lo = 0.75 * keep[0]
+    nxt = [x for x in f if x > keep[-1]]
+    hi = min(1.1 * keep[-1], 0.5 * (keep[-1] + nxt[0])) if nxt else 1.15 * keep[-1]
+    fs = 2048
+    while fs < 2.6 * hi:
+        fs *= 2
+    spacing = damping * keep[0]
+    samples = 4096
+    while fs / samples > spacing and samples < 32768:
+        samples *= 2
+    return lo, hi, fs, samples, len(keep)
+
+
+def effect_set(candidate):
+    return sorted((e["kind"], e["target"]) for e in candidate.get("effects", []))
+
+
+def fitted_value(candidate, kind, target, name):
+    """The fitted parameter `name` of the effect (kind, target) of a candidate."""
+    for e in candidate.get("effects", []):
+        if e["kind"] == kind and e["target"] == target:
+            if kind == "series_compliance":
+                # The law as TOML text: a linear layer's k; a Hertz contact has none to compare.
+                found = re.search(r"linear\s*=\s*\{\s*k\s*=\s*([-+0-9.eE]+)", str(e.get("law", "")))
+                return float(found.group(1)) if found else None
+            return e.get("parameters", {}).get(name, e.get(name))
+    return None
+
+
+def score(case, diag, corr_after, corr_before, times):
+    truth = sorted((e["kind"], e["target"]) for e in case["truth"])
+    cands = diag["candidates"]
+    first = cands[0]
+    rank1 = effect_set(first)
+    right = rank1 == truth
+    truth_rank, p_truth = None, 0.0
+    for c in cands:
+        if effect_set(c) == truth:
+            truth_rank, p_truth = c["rank"], c.get("probability", 0.0)
+            break
+    params = []
+    for e in case["truth"]:
+        for name, value in e["parameters"].items():
+            got = fitted_value(first, e["kind"], e["target"], name) if right else None
+            params.append({"effect": f'{e["kind"]}:{e["target"]}', "name": name, "truth": value, "fitted": got,
+                           "rel_error": (abs(got / value - 1.0) if got else None)})
+    params_ok = right and all(p["rel_error"] is not None and p["rel_error"] <= PARAMETER_TOLERANCE for p in params)
+    agreement = sum(c["summary"]["mean_agreement_pct"] for c in corr_after) / len(corr_after)
+    before = sum(c["summary"]["mean_agreement_pct"] for c in corr_before) / len(corr_before)
+    return {
+        "index": case["index"], "seed": case["seed"], "family": case["family"], "noise": case["noise"],
+        "truth": case["truth"], "n_effects": len(case["truth"]),
+        "kinds": sorted({e["kind"] for e in case["truth"]}) or ["none"],
+        "member": any("/" in e["target"] or e["target"].startswith("points:") for e in case["truth"]),
+        "rank1": {"kind": first["kind"], "target": first["target"], "probability": first.get("probability"),
+                  "parameters": first.get("parameters", {})},
+        "right": right, "parameters": params, "parameters_ok": params_ok,
+        "truth_rank": truth_rank, "p_truth": p_truth, "p_rank1": first.get("probability", 0.0),
+        "agreement_before_pct": before, "agreement_after_pct": agreement,
+        "agreement_ok": agreement >= AGREEMENT_GOAL,
+        "test_modes": diag.get("test_modes"), "baseline_error_pct": diag["baseline"]["mean_abs_frequency_error_pct"],
+        "explanation": diag.get("explanation", ""), "seconds": times,
+        "runner_up": ({"kind": cands[1]["kind"], "target": cands[1]["target"],
+                       "probability": cands[1].get("probability")} if len(cands) > 1 else None),
+    }
+
+
+def run_case(ema, index, seed, work, keep):
+    case = cases.make_case(index, seed)
+    folder = os.path.join(work, "cases", f"{index:04d}")
+    shutil.rmtree(folder, ignore_errors=True)
+    os.makedirs(folder)
+    cases.write_case(case, folder)
+    times = {}
+    t0 = time.monotonic()
+    setups = case["setups"]
+    sflag = lambda s: ["--setup", s] if s else []
+    tag = lambda s: s or "test"
+    # The test's band from the truth's own modes (an engineer picks it from the FRFs).
+    freqs = []
+    for s in setups:
+        run_ema(ema, ["model", "truth.toml", "-o", f"truth-{tag(s)}.unv", "--json", f"truth-{tag(s)}.json"] + sflag(s),
+                folder, f"model-{tag(s)}.log")
+        freqs += [m["frequency_hz"] for m in read_json(os.path.join(folder, f"truth-{tag(s)}.json"))["modes"]]
+    damping = float(case["files"]["nominal.toml"].split("ratio = ", 1)[1].split("\n", 1)[0])
+    lo, hi, fs, samples, n_modes = choose_band(freqs, case["family"], damping)
+    times["model"] = time.monotonic() - t0
+    tests = []
+    for k, s in enumerate(setups):
+        plan = (case["files"]["plan.toml"].replace("{fs}", f"{fs}.0").replace("{samples}", str(samples))
+                .replace("{plan_seed}", str(1000 * index + k + 1)))
+        with open(os.path.join(folder, f"plan-{tag(s)}.toml"), "w") as f:
+            f.write(plan)
+        for step, args in (("simulate", ["simulate", "simulate.toml", "--plan", f"plan-{tag(s)}.toml",
+                                         "-o", f"time-{tag(s)}.unv", "--binary"] + sflag(s)),
+                           ("frf", ["frf", f"time-{tag(s)}.unv", "-o", f"frf-{tag(s)}.unv"]),
+                           ("fit", ["fit", f"frf-{tag(s)}.unv", "-o", f"modes-{tag(s)}.unv", "--band",
+                                    f"{lo:.3f}:{hi:.3f}", "--json", f"modes-{tag(s)}.json"])):
+            times[step] = times.get(step, 0.0) + run_ema(ema, args, folder, f"{step}-{tag(s)}.log")
+        tests.append((s, f"modes-{tag(s)}.unv"))
+    args = ["diagnose", "nominal.toml"]
+    for s, modes in tests:
+        args += ["--test", f"{s}={modes}" if s else modes]
+    times["diagnose"] = run_ema(ema, args + ["--json", "diag.json", "-o", "updated.toml"], folder, "diagnose.log")
+    corr_after, corr_before = [], []
+    t1 = time.monotonic()
+    for s, modes in tests:
+        for model, out in (("updated.toml", corr_after), ("nominal.toml", corr_before)):
+            name = f"corr-{model.split('.')[0]}-{tag(s)}.json"
+            run_ema(ema, ["correlate", modes, model, "--json", name] + sflag(s), folder, f"correlate-{tag(s)}.log")
+            out.append(read_json(os.path.join(folder, name)))
+    times["correlate"] = time.monotonic() - t1
+    times["total"] = time.monotonic() - t0
+    result = score(case, read_json(os.path.join(folder, "diag.json")), corr_after, corr_before, times)
+    result.update({"band_hz": [lo, hi], "sample_rate_hz": fs, "samples": samples, "truth_modes_in_band": n_modes,
+                   "references": case["references"], "sensor_points": len(case["sensor_points"]),
+                   "sensor_mass_kg": case["sensor_mass"]})
+    if not keep:
+        shutil.rmtree(folder, ignore_errors=True)
+    return result
+
+
+def run_one(ema, index, seed, work, keep):
+    """One case, never raising: a failed step is a scored failure with its message."""
+    out = os.path.join(work, "scores", f"case-{index:04d}.json")
+    try:
+        result = run_case(ema, index, seed, work, keep)
+    except Exception as e:  # noqa: BLE001 — any failure of one case is that case's score, never the run's end
+        case = cases.make_case(index, seed)
+        result = {"index": index, "seed": seed, "family": case["family"], "noise": case["noise"],
+                  "truth": case["truth"], "n_effects": len(case["truth"]),
+                  "kinds": sorted({e["kind"] for e in case["truth"]}) or ["none"],
+                  "member": any("/" in e["target"] or e["target"].startswith("points:") for e in case["truth"]),
+                  "right": False, "parameters_ok": False, "agreement_ok": False, "p_truth": 0.0, "p_rank1": None,
+                  "error": f"{type(e).__name__}: {e}"}
+    tmp = out + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(result, f, indent=1)
+    os.replace(tmp, out)
+    return result
+
+
+def parse_range(text):
+    """Case indices: "0:200" (200 excluded), "0:200:8" (every 8th), "7", or a comma list of these."""
+    out = []
+    for part in text.split(","):
+        fields = [int(f) for f in part.split(":")]
+        if len(fields) == 1:
+            out.append(fields[0])
+        elif len(fields) in (2, 3):
+            out += list(range(*fields))
+        else:
+            raise SystemExit(f"bench.py: --cases {text!r}: expected A:B, A:B:STEP or an index")
+    if not out or min(out) < 0:
+        raise SystemExit(f"bench.py: --cases {text!r} selects no case")
+    return sorted(set(out))
+
+
+def run_range(args):
+    if not (os.path.isfile(args.ema) and os.access(args.ema, os.X_OK)):
+        print(f"bench.py: the ema executable is missing or not executable: {args.ema}", file=sys.stderr)
+        sys.exit(2)
+    ema = os.path.abspath(args.ema)
+    os.makedirs(os.path.join(args.work, "scores"), exist_ok=True)
+    indices = parse_range(args.cases)
+    start = time.monotonic()
+    results = []
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+        futures = {pool.submit(run_one, ema, i, args.seed, args.work, args.keep): i for i in indices}
+        for fut in concurrent.futures.as_completed(futures):
+            r = fut.result()
+            results.append(r)
+            status = "right" if r["right"] else ("ERROR " + r["error"][:120] if "error" in r else "wrong")
+            print(f"case {r['index']:4d} {r['family']:8s} noise {100 * r['noise']:.1f}% "
+                  f"truth {'+'.join(e['kind'] + ':' + e['target'] for e in r['truth']) or 'none'}: {status}"
+                  + ("" if r["right"] or "error" in r else f" (rank 1 {r['rank1']['kind']}:{r['rank1']['target']})"),
+                  flush=True)
+    wall = time.monotonic() - start
+    with open(os.path.join(args.work, f"wall-{args.cases.replace(':', '-').replace(',', '_')}.json"), "w") as f:
+        json.dump({"cases": args.cases, "count": len(indices), "jobs": args.jobs, "wall_seconds": wall}, f)
+    print(f"{len(results)} cases in {wall:.0f} s with --jobs {args.jobs}")
+    return results
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="command", required=True)
+    for name in ("run", "check"):
+        q = sub.add_parser(name)
+        q.add_argument("--ema", required=True, help="the built ema executable")
+        q.add_argument("--cases", default="0:200",
+                       help="case indices: A:B (B excluded), A:B:STEP, one index, or a comma list")
+        q.add_argument("--jobs", type=int, default=1, help="cases run at once (default 1)")
+        q.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"benchmark seed (default {DEFAULT_SEED})")
+        q.add_argument("--work", default="diagnosis-benchmark-work", help="folder for cases and scores")
+        q.add_argument("--keep", action="store_true", help="keep each case's files (default: scores only)")
+        if name == "check":
+            q.add_argument("--floor", type=float, required=True, help="minimum share right at rank 1")
+    g = sub.add_parser("gather")
+    g.add_argument("--work", default="diagnosis-benchmark-work")
+    g.add_argument("--doc", help="markdown page whose generated section is replaced")
+    g.add_argument("--svg", help="calibration plot to write")
+    args = p.parse_args()
+    if args.command == "run":
+        run_range(args)
+    elif args.command == "gather":
+        report.gather(args.work, args.doc, args.svg)
+    else:
+        results = run_range(args)
+        right = sum(1 for r in results if r["right"])
+        errors = [r for r in results if "error" in r]
+        rate = right / len(results)
+        print(f"right at rank 1: {right}/{len(results)} = {100 * rate:.1f} % (floor {100 * args.floor:.1f} %)")
+        for r in errors:
+            print(f"case {r['index']}: {r['error']}", file=sys.stderr)
+        sys.exit(0 if rate >= args.floor and not errors else 1)
+
+
+if __name__ == "__main__":
+    main()

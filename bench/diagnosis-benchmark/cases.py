@@ -1,0 +1,495 @@
+"""Random hidden-effect cases for the diagnosis benchmark (docs/diagnosis-benchmark.md).
+
+A case is a nominal model (what the engineer believes), the same model with one or two hidden
+[[effect]] blocks or none (the truth), and a hammer-test plan per setup. Everything is drawn
+from random.Random(f"{seed}:{index}"), so a case depends only on the seed and its index and can
+be regenerated anywhere (one scheduler task per index).
+
+Three families:
+  stack     2-3 rigid bodies stacked on four bolted joints per interface (three springs each, a
+            member per joint) over four mounts to ground.
+  carriage  an air-bearing carriage on two pad types (vertical pads with an exponential
+            load-lift curve, lateral pads with an inverse-power curve read from CSV) over a base
+            on mounts, tested in two stud settings (two [[setup]]s, two tests).
+  fe        a beam from Matrix Market M/K (Euler-Bernoulli, uz and ry per node) on 2-3
+            boundary springs of different stiffness.
+
+Only the standard library: the files follow docs/plan-format.md and the model-format contract.
+"""
+
+import math
+import os
+import random
+
+NOISE_LEVELS = (0.005, 0.02, 0.05)
+FAMILIES = ("stack", "carriage", "fe")
+# Effect count by (index // 9) % 5: one case in five has no hidden effect.
+EFFECT_COUNTS = (0, 1, 1, 2, 2)
+
+
+def fmt(x):
+    return repr(float(x))
+
+
+def vec(v):
+    return "[" + ", ".join(fmt(c) for c in v) + "]"
+
+
+def log_uniform(rng, lo, hi):
+    return math.exp(rng.uniform(math.log(lo), math.log(hi)))
+
+
+def factor_away_from_one(rng, soft=(0.15, 0.5), stiff=(1.8, 3.0)):
+    """A stiffness factor clearly different from 1: softer (loosened) three times in four."""
+    return log_uniform(rng, *soft) if rng.random() < 0.75 else log_uniform(rng, *stiff)
+
+
+def box_inertia(m, a, b, c):
+    return [m * (b * b + c * c) / 12.0, m * (a * a + c * c) / 12.0, m * (a * a + b * b) / 12.0]
+
+
+class ModelText:
+    """Collects the TOML of one model; `body_of_point` and spring metadata feed the effect draw."""
+
+    def __init__(self, name, damping):
+        self.head = f'[model]\nname = "{name}"\n\n[damping]\nratio = {fmt(damping)}\n\n'
+        self.bodies = []      # (name, mass, text-with-{uncertainty})
+        self.springs = []     # dicts: name, group, member, k (linearised, for info), text
+        self.points = []      # dicts: id, body or node, at, text
+        self.extra = ""       # [fe], [[setup]] ...
+        self.tail = ""
+
+    def body(self, name, mass, dims, centre):
+        inertia = box_inertia(mass, *dims)
+        self.bodies.append({"name": name, "mass": mass, "centre": centre, "dims": dims, "uncertainty": None,
+                            "inertia": inertia})
+
+    def spring(self, name, group, member, a_body, at, b_body, direction, law, k, kind=None, a_node=None):
+        self.springs.append({"name": name, "group": group, "member": member, "a_body": a_body, "at": at,
+                             "b_body": b_body, "direction": direction, "law": law, "k": k, "kind": kind,
+                             "a_node": a_node})
+
+    def point(self, pid, body=None, at=None, node=None):
+        self.points.append({"id": pid, "body": body, "at": at, "node": node})
+
+    def text(self, sensor_points=(), sensor_mass=0.0):
+        out = [self.head, self.extra]
+        for b in self.bodies:
+            out.append(f'[[body]]\nname = "{b["name"]}"\nmass = {fmt(b["mass"])}\ninertia = {vec(b["inertia"])}\n'
+                       f'centre = {vec(b["centre"])}\n')
+            if b["uncertainty"] is not None:
+                out.append(f'uncertainty = {fmt(b["uncertainty"])}\n')
+            out.append("\n")
+        for s in self.springs:
+            a = (f'{{ node = {s["a_node"]} }}' if s["a_node"] is not None
+                 else f'{{ body = "{s["a_body"]}", at = {vec(s["at"])} }}')
+            out.append(f'[[spring]]\nname = "{s["name"]}"\ngroup = "{s["group"]}"\nmember = "{s["member"]}"\n')
+            if s["kind"]:
+                out.append(f'kind = "{s["kind"]}"\n')
+            out.append(f'a = {a}\nb = {{ body = "{s["b_body"]}" }}\ndirection = {vec(s["direction"])}\n'
+                       f'law = {s["law"]}\n\n')
+        for p in self.points:
+            if p["node"] is not None:
+                out.append(f'[[point]]\nid = {p["id"]}\nnode = {p["node"]}\n\n')
+            else:
+                out.append(f'[[point]]\nid = {p["id"]}\nbody = "{p["body"]}"\nat = {vec(p["at"])}\n\n')
+        # The accelerometers the engineer knows about: one mass per instrumented point.
+        by_id = {p["id"]: p for p in self.points}
+        for pid in sensor_points:
+            if sensor_mass <= 0.0:
+                break
+            p = by_id[pid]
+            where = (f'node = {p["node"]}' if p["node"] is not None
+                     else f'body = "{p["body"]}"\nat = {vec(p["at"])}')
+            out.append(f'[[mass]]\nname = "sensor-{pid}"\n{where}\nmass = {fmt(sensor_mass)}\n\n')
+        out.append(self.tail)
+        return "".join(out)
+
+
+# ---------------------------------------------------------------- stack
+
+def build_stack(rng, files):
+    m = ModelText("random stack on bolted joints and mounts", rng.uniform(0.008, 0.02))
+    levels = rng.choice((2, 3))
+    z = 0.0
+    names = ["base", "middle", "top"] if levels == 3 else ["base", "top"]
+    half = []
+    for i, name in enumerate(names):
+        a, b, c = rng.uniform(0.18, 0.35), rng.uniform(0.14, 0.28), rng.uniform(0.05, 0.12)
+        mass = rng.uniform(8.0, 25.0) if i == 0 else rng.uniform(2.0, 10.0)
+        centre = [rng.uniform(-0.01, 0.01), rng.uniform(-0.01, 0.01), z + c / 2]
+        m.body(name, mass, (a, b, c), centre)
+        half.append((a / 2, b / 2, z, z + c))
+        z += c
+    # Mounts: four corners of the base to ground, three springs each, lateral stiffness
+    # different per side so the group's springs are not all equal.
+    km = (rng.uniform(1e6, 6e6), rng.uniform(1e6, 6e6), rng.uniform(4e6, 2e7))
+    skew = rng.uniform(0.6, 0.9)
+    ax, ay, z0, _ = half[0]
+    for j, (sx, sy) in enumerate(((-1, -1), (-1, 1), (1, -1), (1, 1)), start=1):
+        at = [sx * ax * 0.9, sy * ay * 0.9, z0]
+        for d, axis in enumerate("XYZ"):
+            k = km[d] * (skew if (d == 0 and sy > 0) else 1.0)
+            direction = [1.0 if d == e else 0.0 for e in range(3)]
+            m.spring(f"M{j}{axis}", "mounts", f"M{j}", names[0], at, "ground", direction,
+                     f"{{ linear = {{ k = {fmt(k)} }} }}", k)
+    # Bolted joints between consecutive bodies.
+    for level in range(1, levels):
+        group = "joints" if level == 1 else "upper_joints"
+        prefix = "J" if level == 1 else "U"
+        kj = (rng.uniform(5e6, 3e7), rng.uniform(5e6, 3e7), rng.uniform(2e7, 1.2e8))
+        skew = rng.uniform(0.6, 0.9)
+        ax = min(half[level][0], half[level - 1][0]) * 0.8
+        ay = min(half[level][1], half[level - 1][1]) * 0.8
+        zj = half[level][2]
+        for j, (sx, sy) in enumerate(((-1, -1), (-1, 1), (1, -1), (1, 1)), start=1):
+            at = [sx * ax, sy * ay, zj]
+            for d, axis in enumerate("XYZ"):
+                k = kj[d] * (skew if (d == 0 and sx > 0) else 1.0)
+                direction = [1.0 if d == e else 0.0 for e in range(3)]
+                m.spring(f"{prefix}{j}{axis}", group, f"{prefix}{j}", names[level], at, names[level - 1],
+                         direction, f"{{ linear = {{ k = {fmt(k)} }} }}", k)
+    # Test points: four corners on top of each body.
+    for i, name in enumerate(names):
+        ax, ay, _, ztop = half[i]
+        for j, (sx, sy) in enumerate(((-1, -1), (-1, 1), (1, -1), (1, 1))):
+            m.point(100 * (i + 1) + j + 1, body=name, at=[sx * ax * 0.8, sy * ay * 0.8, ztop])
+    for b in m.bodies:
+        b["uncertainty"] = rng.choice((0.02, None, 0.03))
+    return m, [None]
+
+
+# ---------------------------------------------------------------- carriage
+
+def film_load(w_ref, h_ref, shape, p, h):
+    """Load of one pad at gap h: exponential (decay length p) or inverse power (exponent p)."""
+    return w_ref * (math.exp(-(h - h_ref) / p) if shape == "exp" else (h_ref / h) ** p)
+
+
+def film_stiffness(w_ref, h_ref, shape, p, h):
+    """-dW/dh at gap h (for the ranges of the hidden effects' parameters)."""
+    w = film_load(w_ref, h_ref, shape, p, h)
+    return w / p if shape == "exp" else p * w / h
+
+
+def film_curve(w_ref, h_ref, shape, p):
+    """Load-lift points (gap m, load N) of one pad type, 0.5..30 um."""
+    return [((0.5 + 0.5 * i) * 1e-6, film_load(w_ref, h_ref, shape, p, (0.5 + 0.5 * i) * 1e-6)) for i in range(60)]
+
+
+def build_carriage(rng, files):
+    m = ModelText("random air-bearing carriage, two pad types, two stud settings", rng.uniform(0.008, 0.02))
+    cl, cw, ch = rng.uniform(0.12, 0.25), rng.uniform(0.08, 0.16), rng.uniform(0.05, 0.08)
+    cmass = rng.uniform(1.5, 6.0)
+    m.body("carriage", cmass, (cl, cw, ch), [0.0, 0.0, 0.0])
+    bl, bw, bh = cl * rng.uniform(1.4, 2.0), cw * rng.uniform(1.4, 2.0), rng.uniform(0.06, 0.12)
+    bmass = rng.uniform(8.0, 30.0)
+    m.body("base", bmass, (bl, bw, bh), [0.0, 0.0, -ch / 2 - bh / 2])
+    # Vertical pads: exponential W(h) inline; lateral pads: inverse power W(h) from CSV files.
+    v_pad = (rng.uniform(60.0, 200.0), 5e-6, "exp", rng.uniform(5e-6, 8e-6))
+    # The lateral guide pads: front and rear pads of different size and curve (two CSV files),
+    # so that a wrong guide gap changes their stiffnesses by different ratios. With four equal
+    # pads a gap error, a stiffness factor and a series layer are one and the same change.
+    l_front = (rng.uniform(30.0, 70.0), 5e-6, "pow", rng.uniform(1.6, 2.0))
+    l_rear = (l_front[0] * rng.uniform(1.6, 2.4), 5e-6, "pow", rng.uniform(2.4, 3.0))
+    v_curve = film_curve(*v_pad)
+    files["lateral-front.csv"] = "gap,load\n" + "".join(f"{h!r},{w!r}\n" for h, w in film_curve(*l_front))
+    files["lateral-rear.csv"] = "gap,load\n" + "".join(f"{h!r},{w!r}\n" for h, w in film_curve(*l_rear))
+    v_inline = ("gap = [" + ", ".join(repr(h) for h, _ in v_curve) + "], load = ["
+                + ", ".join(repr(w) for _, w in v_curve) + "]")
+    s1 = rng.uniform(3.5e-6, 6.0e-6)
+    s2 = s1 + rng.uniform(2.5e-6, 5.0e-6)
+    guide_gap = rng.uniform(4.0e-6, 7.0e-6)
+    kv = film_stiffness(*v_pad, (s1 + s2) / 2)
+    n = 0
+    for x in (-cl * 0.4, cl * 0.4):
+        for y in (-cw * 0.35, cw * 0.35):
+            n += 1
+            m.spring(f"V{n}", "bearings", f"V{n}", "carriage", [x, y, -ch / 2], "base", [0.0, 0.0, 1.0],
+                     f"{{ series = {{ setting = 5.0e-6, elements = [ {{ air_film = {{ {v_inline} }} }} ] }} }}",
+                     kv)
+    for x, pad, curve in ((-cl * 0.4, l_front, "lateral-front.csv"), (cl * 0.4, l_rear, "lateral-rear.csv")):
+        for y in (-cw / 2, cw / 2):
+            n += 1
+            m.spring(f"L{n}", "guides", f"L{n}", "carriage", [x, y, 0.0], "base", [0.0, -1.0 if y > 0 else 1.0, 0.0],
+                     f'{{ series = {{ setting = {fmt(guide_gap)}, elements = [ {{ air_film = {{ file = "{curve}" }} }} ] }} }}',
+                     film_stiffness(*pad, guide_gap))
+    kd = rng.uniform(1e6, 6e6)
+    m.spring("drive", "drive", "drive", "carriage", [0.0, 0.0, 0.0], "base", [1.0, 0.0, 0.0],
+             f"{{ linear = {{ k = {fmt(kd)} }} }}", kd)
+    km = (rng.uniform(1e6, 6e6), rng.uniform(1e6, 6e6), rng.uniform(4e6, 2e7))
+    skew = rng.uniform(0.6, 0.9)
+    zb = -ch / 2 - bh
+    for j, (sx, sy) in enumerate(((-1, -1), (-1, 1), (1, -1), (1, 1)), start=1):
+        at = [sx * bl * 0.45, sy * bw * 0.45, zb]
+        for d, axis in enumerate("XYZ"):
+            k = km[d] * (skew if (d == 0 and sy > 0) else 1.0)
+            direction = [1.0 if d == e else 0.0 for e in range(3)]
+            m.spring(f"M{j}{axis}", "mounts", f"M{j}", "base", at, "ground", direction,
+                     f"{{ linear = {{ k = {fmt(k)} }} }}", k)
+    for j, (sx, sy) in enumerate(((-1, -1), (-1, 1), (1, -1), (1, 1))):
+        m.point(101 + j, body="carriage", at=[sx * cl * 0.45, sy * cw * 0.45, ch / 2])
+        m.point(201 + j, body="base", at=[sx * bl * 0.45, sy * bw * 0.45, -ch / 2])
+    m.tail = (f'[[setup]]\nname = "stud-a"\noperating = {{ bearings = {fmt(s1)} }}\n\n'
+              f'[[setup]]\nname = "stud-b"\noperating = {{ bearings = {fmt(s2)} }}\n')
+    for b in m.bodies:
+        b["uncertainty"] = rng.choice((0.02, None))
+    m.guide_gap = guide_gap
+    return m, ["stud-a", "stud-b"]
+
+
+# ---------------------------------------------------------------- fe beam
+
+def write_mtx(n, entries):
+    body = "".join(f"{r + 1} {c + 1} {v!r}\n" for (r, c), v in sorted(entries.items(), key=lambda e: (e[0][1], e[0][0]))
+                   if v != 0.0)
+    count = body.count("\n")
+    return f"%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {count}\n{body}"
+
+
+def build_fe(rng, files):
+    steel = rng.random() < 0.6
+    e_mod, rho = (2.1e11, 7850.0) if steel else (7.0e10, 2700.0)
+    length = rng.uniform(0.5, 1.2)
+    width, height = rng.uniform(0.02, 0.06), rng.uniform(0.01, 0.03)
+    elements = rng.choice((8, 10, 12))
+    nodes = elements + 1
+    ei = e_mod * width * height ** 3 / 12.0
+    mpl = rho * width * height
+    le = length / elements
+    kel = [[12, 6 * le, -12, 6 * le], [6 * le, 4 * le * le, -6 * le, 2 * le * le],
+           [-12, -6 * le, 12, -6 * le], [6 * le, 2 * le * le, -6 * le, 4 * le * le]]
+    mel = [[156, 22 * le, 54, -13 * le], [22 * le, 4 * le * le, 13 * le, -3 * le * le],
+           [54, 13 * le, 156, -22 * le], [-13 * le, -3 * le * le, -22 * le, 4 * le * le]]
+    kk, mm = {}, {}
+    for e in range(elements):
+        for i in range(4):
+            for j in range(4):
+                r, c = 2 * e + i, 2 * e + j
+                if r < c:
+                    continue
+                kk[(r, c)] = kk.get((r, c), 0.0) + kel[i][j] * ei / le ** 3
+                mm[(r, c)] = mm.get((r, c), 0.0) + mel[i][j] * mpl * le / 420.0
+    files["fe/K.mtx"] = write_mtx(2 * nodes, kk)
+    files["fe/M.mtx"] = write_mtx(2 * nodes, mm)
+    files["fe/dofs.csv"] = "node,dof\n" + "".join(f"{i},uz\n{i},ry\n" for i in range(1, nodes + 1))
+    files["fe/nodes.csv"] = "node,x,y,z\n" + "".join(f"{i},{(i - 1) * le!r},0,0\n" for i in range(1, nodes + 1))
+    m = ModelText("random FE beam on boundary springs", rng.uniform(0.005, 0.015))
+    m.extra = ('[fe]\nmass = "fe/M.mtx"\nstiffness = "fe/K.mtx"\ndofs = "fe/dofs.csv"\nnodes = "fe/nodes.csv"\n\n')
+    # Supports: the two ends, sometimes a third one inside; stiffness such that the rigid-body
+    # bounce sits well below the first bending mode.
+    beam_mass = mpl * length
+    support_nodes = [1, nodes]
+    if rng.random() < 0.4:
+        support_nodes.insert(1, rng.randint(3, nodes - 2))
+    k_ref = beam_mass * (2 * math.pi * rng.uniform(40.0, 90.0)) ** 2 / len(support_nodes)
+    for s, node in enumerate(support_nodes, start=1):
+        k = k_ref * rng.uniform(0.6, 1.6)
+        m.spring(f"S{s}", "supports", f"S{s}", None, None, "ground", [0.0, 0.0, 1.0],
+                 f"{{ linear = {{ k = {fmt(k)} }} }}", k, a_node=node)
+    for i in range(1, nodes + 1):
+        m.point(100 + i, node=i)
+    return m, [None]
+
+
+BUILDERS = {"stack": build_stack, "carriage": build_carriage, "fe": build_fe}
+
+
+# ---------------------------------------------------------------- effects
+
+def effect_choices(family, m):
+    """Every (kind, target) the truth may hold for this model. Each is a candidate ema diagnose
+    generates; series compliance only where the target's springs differ in stiffness (on one
+    stiffness it IS a stiffness factor and the tool names it so)."""
+    choices = []
+    groups = {}
+    for s in m.springs:
+        groups.setdefault(s["group"], []).append(s)
+    for g, springs in groups.items():
+        members = sorted({s["member"] for s in springs})
+        if g == "drive":
+            continue
+        if g == "bearings":
+            # Set by the two setups: an operating point is overridden there; a series element
+            # (a stud or a compliant layer) and a stiffness error are not.
+            choices += [("series_compliance", g), ("stiffness_scale", g)]
+            continue
+        if g == "guides":
+            choices += [("operating_point", g), ("stiffness_scale", g)]
+            continue
+        choices += [("stiffness_scale", g), ("series_compliance", g)]
+        for mem in members:
+            choices.append(("stiffness_scale", f"{g}/{mem}"))
+            ks = [s["k"] for s in springs if s["member"] == mem]
+            if len(set(ks)) > 1:
+                choices.append(("series_compliance", f"{g}/{mem}"))
+    choices.append(("added_mass", "all_points"))
+    for p in m.points:
+        choices.append(("added_mass", f"points:{p['id']}"))
+    for b in m.bodies:
+        choices.append(("mass_scale", b["name"]))
+        if family != "carriage" or b["name"] == "base":
+            choices.append(("ground_spring", b["name"]))
+    return choices
+
+
+def total_mass(m, fe_mass=0.0):
+    return sum(b["mass"] for b in m.bodies) + fe_mass
+
+
+def conflicts(a, b, m):
+    """Two effects the benchmark does not combine: the same group (or a member of it), the same
+    body, or two mass effects on one body (an added mass and a mass factor look alike)."""
+    (ka, ta), (kb, tb) = a, b
+    group = lambda t: t.split("/")[0]
+    if group(ta) == group(tb):
+        return True
+    mass_kinds = ("added_mass", "mass_scale")
+    if ka in mass_kinds and kb in mass_kinds:
+        return True
+    return False
+
+
+def draw_parameter(rng, kind, target, m, mean_k, fe_mass):
+    """The hidden effect's parameter and its TOML line, within physical ranges that a hammer
+    test can see (a factor 0.9 on one of twelve springs is not a benchmark case but noise)."""
+    if kind == "stiffness_scale":
+        v = factor_away_from_one(rng, soft=(0.15, 0.45) if "/" in target else (0.3, 0.6),
+                                 stiff=(2.0, 3.0) if "/" in target else (1.6, 2.5))
+        return {"factor": v}, f"factor = {fmt(v)}"
+    if kind == "series_compliance":
+        v = mean_k * log_uniform(rng, 0.3, 1.5)
+        return {"k": v}, f"law = {{ linear = {{ k = {fmt(v)} }} }}"
+    if kind == "operating_point":
+        v = m.guide_gap * (log_uniform(rng, 0.6, 0.75) if rng.random() < 0.5 else log_uniform(rng, 1.35, 1.7))
+        return {"value": v}, f"value = {fmt(v)}"
+    if kind == "added_mass":
+        total = total_mass(m, fe_mass)
+        share = log_uniform(rng, 0.02, 0.05) if target != "all_points" else log_uniform(rng, 0.005, 0.012)
+        v = total * share
+        return {"mass": v}, f"mass = {fmt(v)}"
+    if kind == "mass_scale":
+        v = log_uniform(rng, 1.1, 1.25) if rng.random() < 0.6 else log_uniform(rng, 0.8, 0.9)
+        return {"factor": v}, f"factor = {fmt(v)}"
+    if kind == "ground_spring":
+        v = mean_k * log_uniform(rng, 0.1, 0.5)
+        return {"k": v}, f"k = {fmt(v)}"
+    raise ValueError(kind)
+
+
+def make_case(index, seed):
+    """The case: files to write (relative path -> text), the truth and the test plans."""
+    rng = random.Random(f"diagnosis-benchmark:{seed}:{index}")
+    family = FAMILIES[index % 3]
+    noise = NOISE_LEVELS[(index // 3) % 3]
+    n_effects = EFFECT_COUNTS[(index // 9) % 5]
+    files = {}
+    m, setups = BUILDERS[family](rng, files)
+    fe_mass = 0.0
+    if family == "fe":
+        # The FE beam's mass from its M matrix: translational share (consistent matrix ~ whole).
+        fe_mass = sum(v for (r, c), v in _parse_mtx(files["fe/M.mtx"]).items() if r == c and r % 2 == 0)
+    choices = effect_choices(family, m)
+    truth = []
+    tries = 0
+    while len(truth) < n_effects and tries < 200:
+        tries += 1
+        # Kinds first (uniform over the kinds this family has), then a target of that kind,
+        # so that the many single points and members do not swamp the draw.
+        kinds = sorted({k for k, _ in choices})
+        kind = rng.choice(kinds)
+        target = rng.choice([t for k, t in choices if k == kind])
+        if any(conflicts((kind, target), (e["kind"], e["target"]), m) for e in truth):
+            continue
+        truth.append({"kind": kind, "target": target})
+    blocks = []
+    for e in truth:
+        springs = [s for s in m.springs
+                   if s["group"] == e["target"].split("/")[0]
+                   and ("/" not in e["target"] or s["member"] == e["target"].split("/")[1])]
+        ks = [s["k"] for s in springs if s["k"]]
+        if ks:
+            mean_k = sum(ks) / len(ks)
+        else:
+            ks_all = [s["k"] for s in m.springs if s["k"]]
+            mean_k = sum(ks_all) / len(ks_all)
+        if e["kind"] == "ground_spring":
+            ks_all = [s["k"] for s in m.springs if s["k"]]
+            mean_k = sum(ks_all) / len(ks_all)
+        if e["kind"] == "mass_scale":
+            # The engineer's model says the body's mass is a CAD estimate (10-15 %): the hidden
+            # error lies within two of its σ, as a Bayesian benchmark requires.
+            for b in m.bodies:
+                if b["name"] == e["target"]:
+                    b["uncertainty"] = rng.choice((0.1, 0.15))
+        params, line = draw_parameter(rng, e["kind"], e["target"], m, mean_k, fe_mass)
+        e["parameters"] = params
+        blocks.append(f'[[effect]]\nkind = "{e["kind"]}"\ntarget = "{e["target"]}"\n{line}\n\n')
+    # The test plan: references, which points carry (triaxial) sensors, their mass, sets.
+    plan = draw_plan(rng, family, m, noise, seed, index)
+    nominal = m.text(plan["sensor_points"], plan["sensor_mass"])
+    files["nominal.toml"] = nominal
+    files["truth.toml"] = nominal + "\n" + "".join(blocks)
+    # simulate adds the plan's sensor masses itself: its model has no sensor [[mass]].
+    files["simulate.toml"] = m.text() + "\n" + "".join(blocks)
+    files["plan.toml"] = plan["text"]
+    return {"index": index, "seed": seed, "family": family, "noise": noise, "truth": truth, "setups": setups,
+            "sensor_mass": plan["sensor_mass"], "sensor_points": plan["sensor_points"],
+            "references": plan["references"], "files": files}
+
+
+def _parse_mtx(text):
+    out = {}
+    lines = [l for l in text.splitlines() if l and not l.startswith("%")]
+    for l in lines[1:]:
+        r, c, v = l.split()
+        out[(int(r) - 1, int(c) - 1)] = float(v)
+    return out
+
+
+def draw_plan(rng, family, m, noise, seed, index):
+    if family == "fe":
+        ids = [p["id"] for p in m.points]
+        count = rng.randint(max(5, len(ids) // 2), len(ids))
+        sensor_points = sorted(rng.sample(ids, count))
+        # Hammer away from the supports and (with two) at two different places.
+        inner = ids[1:-1]
+        references = [f"{r}+Z" for r in sorted(rng.sample(inner, rng.choice((1, 2))))]
+        sets = [[f"{p}+Z" for p in sensor_points]]
+        sensor_mass = log_uniform(rng, 0.002, 0.015)
+    else:
+        by_body = {}
+        for p in m.points:
+            by_body.setdefault(p["body"], []).append(p["id"])
+        sensor_points = []
+        for body, ids in by_body.items():
+            sensor_points += sorted(rng.sample(ids, rng.choice((3, 4))))
+        sensor_points.sort()
+        # Three hammer DOFs, one per direction, at random points (a hammer test of a 3D
+        # article excites each direction somewhere).
+        all_ids = [p["id"] for p in m.points]
+        references = [f"{rng.choice(all_ids)}{d}" for d in ("+X", "+Y", "+Z")]
+        # One set of triaxial sensors, or two sets (lateral, then vertical) on the same points:
+        # the mass loading is the same in every set, so the engineer's model holds it.
+        if rng.random() < 0.5:
+            sets = [[f"{p}{d}" for p in sensor_points for d in ("+X", "+Y", "+Z")]]
+        else:
+            sets = [[f"{p}{d}" for p in sensor_points for d in ("+X", "+Y")], [f"{p}+Z" for p in sensor_points]]
+        sensor_mass = log_uniform(rng, 0.002, 0.03)
+    impacts = rng.choice((3, 4, 5))
+    lines = ["[plan]", "references = [" + ", ".join(f'"{r}"' for r in references) + "]",
+             "sample_rate_hz = {fs}", "samples = {samples}", f"impacts = {impacts}", "force_peak_n = 100.0",
+             "pulse_duration_s = 0.3e-3", f"force_noise = {fmt(noise / 2)}", f"response_noise = {fmt(noise)}",
+             f"sensor_mass = {fmt(sensor_mass)}", "seed = {plan_seed}", ""]
+    for i, s in enumerate(sets, start=1):
+        lines += ["[[set]]", f'name = "set {i}"', "sensors = [" + ", ".join(f'"{d}"' for d in s) + "]", ""]
+    return {"text": "\n".join(lines) + "\n", "sensor_points": sensor_points, "references": references,
+            "sensor_mass": sensor_mass}
+
+
+def write_case(case, folder):
+    for rel, text in case["files"].items():
+        path = os.path.join(folder, rel)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "w") as f:
+            f.write(text)

@@ -1,0 +1,224 @@
+"""Gather of the diagnosis benchmark: per-case score files -> scores.json, tables (markdown) and
+the calibration plot (a hand-written SVG). Standard library only."""
+
+import glob
+import json
+import math
+import os
+
+BEGIN = "<!-- BEGIN GENERATED: bench.py gather -->"
+END = "<!-- END GENERATED -->"
+# Bins of rank 1's probability for the calibration (upper edge 1 included in the last).
+BIN_EDGES = (0.0, 0.5, 0.7, 0.9, 0.99, 1.0)
+
+
+def load(work):
+    rows = []
+    for path in sorted(glob.glob(os.path.join(work, "scores", "case-*.json"))):
+        with open(path) as f:
+            rows.append(json.load(f))
+    rows.sort(key=lambda r: r["index"])
+    return rows
+
+
+def pct(a, n):
+    return f"{a}/{n} = {100.0 * a / n:.1f} %" if n else "–"
+
+
+def rate_row(label, rows):
+    n = len(rows)
+    right = sum(r["right"] for r in rows)
+    par = sum(r.get("parameters_ok", False) for r in rows if r["n_effects"] > 0)
+    n_eff = sum(1 for r in rows if r["n_effects"] > 0)
+    agr = sum(r.get("agreement_ok", False) for r in rows)
+    p_truth = [r.get("p_truth", 0.0) or 0.0 for r in rows]
+    mean_p = sum(p_truth) / n if n else float("nan")
+    return f"| {label} | {n} | {pct(right, n)} | {pct(par, n_eff)} | {pct(agr, n)} | {mean_p:.2f} |"
+
+
+HEADER = ("| cases | n | rank 1 right (kinds, targets, members) | parameters within 10 % (cases with an effect) "
+          "| mean agreement ≥ 99 % after update | mean P(truth) |\n|---|---|---|---|---|---|")
+
+
+def calibration(rows):
+    bins = []
+    for lo, hi in zip(BIN_EDGES[:-1], BIN_EDGES[1:]):
+        inside = [r for r in rows if r.get("p_rank1") is not None
+                  and lo <= r["p_rank1"] and (r["p_rank1"] < hi or (hi == 1.0 and r["p_rank1"] <= 1.0))]
+        n = len(inside)
+        if not n:
+            bins.append({"lo": lo, "hi": hi, "n": 0})
+            continue
+        mean_p = sum(r["p_rank1"] for r in inside) / n
+        freq = sum(r["right"] for r in inside) / n
+        bins.append({"lo": lo, "hi": hi, "n": n, "mean_predicted": mean_p, "observed": freq,
+                     "right": sum(r["right"] for r in inside),
+                     "sigma": math.sqrt(max(freq * (1 - freq), 1.0 / (4 * n)) / n)})
+    scored = [r for r in rows if r.get("p_rank1") is not None]
+    brier = sum((r["p_rank1"] - (1.0 if r["right"] else 0.0)) ** 2 for r in scored) / max(1, len(scored))
+    return bins, brier
+
+
+def svg(bins, brier, n):
+    w, h, left, bottom, size = 460, 440, 70, 60, 340
+    X = lambda p: left + p * size
+    Y = lambda p: h - bottom - p * size
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" '
+           'font-family="monospace" font-size="12">',
+           f'<rect x="0" y="0" width="{w}" height="{h}" fill="white"/>',
+           f'<text x="{w / 2}" y="22" text-anchor="middle" font-size="14">Calibration of rank 1 ({n} cases, '
+           f'Brier {brier:.3f})</text>']
+    for t in (0.0, 0.2, 0.4, 0.6, 0.8, 1.0):
+        out.append(f'<line x1="{X(t)}" y1="{Y(0)}" x2="{X(t)}" y2="{Y(1)}" stroke="#eee"/>')
+        out.append(f'<line x1="{X(0)}" y1="{Y(t)}" x2="{X(1)}" y2="{Y(t)}" stroke="#eee"/>')
+        out.append(f'<text x="{X(t)}" y="{Y(0) + 16}" text-anchor="middle">{t:.1f}</text>')
+        out.append(f'<text x="{X(0) - 8}" y="{Y(t) + 4}" text-anchor="end">{t:.1f}</text>')
+    out.append(f'<rect x="{X(0)}" y="{Y(1)}" width="{size}" height="{size}" fill="none" stroke="black"/>')
+    out.append(f'<line x1="{X(0)}" y1="{Y(0)}" x2="{X(1)}" y2="{Y(1)}" stroke="#888" stroke-dasharray="5,4"/>')
+    out.append(f'<text x="{X(0.5)}" y="{h - 18}" text-anchor="middle">probability ema gave rank 1 (bin mean)</text>')
+    out.append(f'<text transform="translate(20,{Y(0.5)}) rotate(-90)" text-anchor="middle">'
+               'observed share of rank 1 right</text>')
+    for b in bins:
+        # The bin's extent as a light band, the point at its mean with a binomial 1σ bar.
+        out.append(f'<rect x="{X(b["lo"])}" y="{Y(0) - 6}" width="{X(b["hi"]) - X(b["lo"])}" height="6" '
+                   f'fill="#cde" stroke="white"/>')
+        if not b["n"]:
+            continue
+        x, y = X(b["mean_predicted"]), Y(b["observed"])
+        y1, y2 = Y(min(1.0, b["observed"] + b["sigma"])), Y(max(0.0, b["observed"] - b["sigma"]))
+        out.append(f'<line x1="{x}" y1="{y1}" x2="{x}" y2="{y2}" stroke="#245"/>')
+        out.append(f'<circle cx="{x}" cy="{y}" r="{3 + 2 * math.sqrt(b["n"]) / 2:.1f}" fill="#357" '
+                   'fill-opacity="0.6" stroke="#123"/>')
+    # The counts in a small table in the empty lower-right corner (the points crowd near 1).
+    rows = [b for b in bins if b["n"]]
+    tx, ty = X(1.0) - 206, Y(0.0) - 16 * (len(rows) + 1) - 10
+    out.append(f'<rect x="{tx - 4}" y="{ty - 13}" width="206" height="{16 * (len(rows) + 1) + 4}" fill="white" '
+               'stroke="#ccc"/>')
+    out.append(f'<text x="{tx}" y="{ty}" font-weight="bold" xml:space="preserve">bin          n  said  right</text>')
+    for k, b in enumerate(rows, start=1):
+        out.append(f'<text x="{tx}" y="{ty + 16 * k}" xml:space="preserve">{b["lo"]:.2f}–{b["hi"]:.2f} '
+                   f'{b["n"]:4d} {b["mean_predicted"]:.3f} {b["observed"]:.3f}</text>')
+    out.append("</svg>")
+    return "\n".join(out) + "\n"
+
+
+def fmt_truth(r):
+    return " + ".join(f'{e["kind"]} {e["target"]}' for e in r["truth"]) or "none"
+
+
+def tables(rows):
+    lines = []
+    n = len(rows)
+    lines.append(f"Cases: {n} (seed {rows[0]['seed'] if rows else '–'}).\n")
+    lines.append(HEADER)
+    lines.append(rate_row("all", rows))
+    low = [r for r in rows if r["noise"] <= 0.02]
+    lines.append(rate_row("noise 0.5–2 % (the goal: ≥ 95 % right)", low))
+    nones = [r for r in rows if r["n_effects"] == 0]
+    spurious = sum(1 for r in nones if not r["right"])
+    lines.append("")
+    lines.append(f"\"None\" cases beaten by a spurious effect: {pct(spurious, len(nones))} (goal ≤ 5 %); "
+                 f"at 0.5–2 % noise: {pct(sum(1 for r in nones if not r['right'] and r['noise'] <= 0.02), sum(1 for r in nones if r['noise'] <= 0.02))}.\n")
+    lines.append("By family\n")
+    lines.append(HEADER)
+    for fam in ("stack", "carriage", "fe"):
+        lines.append(rate_row(fam, [r for r in rows if r["family"] == fam]))
+    lines.append("\nBy noise level (hammer force and response noise rms / clean rms)\n")
+    lines.append(HEADER)
+    for noise in sorted({r["noise"] for r in rows}):
+        lines.append(rate_row(f"{100 * noise:.1f} %", [r for r in rows if r["noise"] == noise]))
+    lines.append("\nBy number of hidden effects, and group vs one member or point\n")
+    lines.append(HEADER)
+    for k in (0, 1, 2):
+        lines.append(rate_row(f"{k} effect(s)", [r for r in rows if r["n_effects"] == k]))
+    lines.append(rate_row("holding a member or single-point effect", [r for r in rows if r.get("member")]))
+    lines.append(rate_row("group/body/all-points effects only", [r for r in rows if r["n_effects"] and not r.get("member")]))
+    lines.append("\nBy effect kind (a two-effect case counts under each of its kinds)\n")
+    lines.append(HEADER)
+    kinds = sorted({k for r in rows for k in r["kinds"]})
+    for k in kinds:
+        lines.append(rate_row(k, [r for r in rows if k in r["kinds"]]))
+    lines.append("\nBy family and noise: rank 1 right\n")
+    noises = sorted({r["noise"] for r in rows})
+    lines.append("| family | " + " | ".join(f"{100 * x:.1f} %" for x in noises) + " |")
+    lines.append("|---|" + "---|" * len(noises))
+    for fam in ("stack", "carriage", "fe"):
+        cells = []
+        for x in noises:
+            sel = [r for r in rows if r["family"] == fam and r["noise"] == x]
+            cells.append(pct(sum(r["right"] for r in sel), len(sel)))
+        lines.append(f"| {fam} | " + " | ".join(cells) + " |")
+    bins, brier = calibration(rows)
+    lines.append("\nCalibration: rank 1's probability against how often rank 1 was right\n")
+    lines.append("| probability bin | cases | mean probability | observed right | right |")
+    lines.append("|---|---|---|---|---|")
+    for b in bins:
+        if b["n"]:
+            lines.append(f"| {b['lo']:.2f}–{b['hi']:.2f} | {b['n']} | {b['mean_predicted']:.3f} | "
+                         f"{b['observed']:.3f} ± {b['sigma']:.3f} | {b['right']} |")
+        else:
+            lines.append(f"| {b['lo']:.2f}–{b['hi']:.2f} | 0 | – | – | – |")
+    lines.append(f"\nBrier score of rank 1's probability: {brier:.3f} (0 = perfect; always saying 0.5 gives 0.25).\n")
+    errors = [r for r in rows if "error" in r]
+    wrong = [r for r in rows if not r["right"] and "error" not in r]
+    lines.append(f"Cases where rank 1 was wrong ({len(wrong)}) or the chain failed ({len(errors)}):\n")
+    lines.append("| case | family | noise | truth | rank 1 (probability) | truth's rank (probability) |")
+    lines.append("|---|---|---|---|---|---|")
+    for r in wrong:
+        r1 = r["rank1"]
+        lines.append(f"| {r['index']} | {r['family']} | {100 * r['noise']:.1f} % | {fmt_truth(r)} | "
+                     f"{r1['kind']} {r1['target']} ({r1['probability']:.3f}) | "
+                     f"{r['truth_rank'] if r['truth_rank'] else 'not ranked'} ({r['p_truth']:.3g}) |")
+    for r in errors:
+        lines.append(f"| {r['index']} | {r['family']} | {100 * r['noise']:.1f} % | {fmt_truth(r)} | "
+                     f"chain failed: {r['error'][:140]} | – |")
+    bad_par = [r for r in rows if r["right"] and r["n_effects"] and not r.get("parameters_ok")]
+    if bad_par:
+        lines.append(f"\nRight at rank 1 but a parameter off by more than 10 % ({len(bad_par)}):\n")
+        lines.append("| case | family | noise | truth | parameter: truth → fitted |")
+        lines.append("|---|---|---|---|---|")
+        for r in bad_par:
+            ps = "; ".join(f"{p['effect']} {p['name']}: {p['truth']:.4g} → "
+                           f"{p['fitted']:.4g}" if p["fitted"] else f"{p['effect']} {p['name']}: no value"
+                           for p in r["parameters"])
+            lines.append(f"| {r['index']} | {r['family']} | {100 * r['noise']:.1f} % | {fmt_truth(r)} | {ps} |")
+    timed = [r for r in rows if "seconds" in r]
+    if timed:
+        tot = sorted(r["seconds"]["total"] for r in timed)
+        steps = {}
+        for r in timed:
+            for k, v in r["seconds"].items():
+                steps[k] = steps.get(k, 0.0) + v
+        lines.append(f"\nTime per case (one core): mean {sum(tot) / len(tot):.1f} s, median {tot[len(tot) // 2]:.1f} s, "
+                     f"max {tot[-1]:.1f} s; summed over the cases: "
+                     + ", ".join(f"{k} {v:.0f} s" for k, v in steps.items() if k != "total")
+                     + f", total {steps.get('total', 0):.0f} s.")
+    return "\n".join(lines) + "\n", bins, brier
+
+
+def gather(work, doc, svg_path):
+    rows = load(work)
+    if not rows:
+        raise SystemExit(f"bench.py gather: no score files under {work}/scores")
+    text, bins, brier = tables(rows)
+    walls = []
+    for path in glob.glob(os.path.join(work, "wall-*.json")):
+        with open(path) as f:
+            walls.append(json.load(f))
+    with open(os.path.join(work, "scores.json"), "w") as f:
+        json.dump({"cases": rows, "calibration": bins, "brier": brier, "runs": walls}, f, indent=1)
+    print(text)
+    if svg_path:
+        os.makedirs(os.path.dirname(svg_path) or ".", exist_ok=True)
+        with open(svg_path, "w") as f:
+            f.write(svg(bins, brier, len(rows)))
+    if doc:
+        with open(doc) as f:
+            page = f.read()
+        if BEGIN not in page or END not in page:
+            raise SystemExit(f"bench.py gather: {doc} has no '{BEGIN}' ... '{END}' section to replace")
+        head, rest = page.split(BEGIN, 1)
+        _, tail = rest.split(END, 1)
+        with open(doc + ".tmp", "w") as f:
+            f.write(head + BEGIN + "\n" + text + END + tail)
+        os.replace(doc + ".tmp", doc)
