@@ -32,6 +32,17 @@ double Rms(const std::vector<double>& x, int begin, int end, double dc) {
   return std::sqrt(s / (end - begin));
 }
 
+/// Lag-one autocorrelation coefficient of x[begin, end) about dc: near 1 for motion sampled
+/// well above its frequency, near 0 for white noise; 0 for a constant stretch.
+double LagOneCorrelation(const std::vector<double>& x, int begin, int end, double dc) {
+  double ss = 0.0, lag = 0.0;
+  for (int i = begin; i < end; ++i) {
+    ss += (x[i] - dc) * (x[i] - dc);
+    if (i + 1 < end) lag += (x[i] - dc) * (x[i + 1] - dc);
+  }
+  return ss > 0.0 ? lag / ss : 0.0;
+}
+
 }  // namespace
 
 int CountPulses(const std::vector<double>& x, double high, double low) {
@@ -203,7 +214,11 @@ ProcessedTest AnalyseImpacts(const HammerMeasurement& test, const ImpactOptions&
       std::string why = clip.Reason(r.full_scale, opt.overload_fraction, opt.flat_top_run);
       if (!why.empty()) why = "response " + DofName(r.channel) + " " + why;
       const double pre_rms = Rms(x, 0, pre_end, dc);
-      if (why.empty() && pre_end >= 8 && rpeak > 0.0 && pre_rms > opt.pretrigger_motion * rpeak)
+      // Motion (a structure still ringing, or moved by hand) is slow against the sampling rate:
+      // successive pre-trigger samples follow each other. Sensor noise does not, and a weakly
+      // excited channel's noise may well exceed the limit without the structure moving.
+      if (why.empty() && pre_end >= 8 && rpeak > 0.0 && pre_rms > opt.pretrigger_motion * rpeak &&
+          LagOneCorrelation(x, 0, pre_end, dc) > opt.pretrigger_motion_correlation)
         why = "response " + DofName(r.channel) +
               Format(" was moving before the impact: pre-trigger rms %.1f %% of its peak (limit %.1f %%)",
                      100.0 * pre_rms / rpeak, 100.0 * opt.pretrigger_motion);

@@ -4,7 +4,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "acquisition/three_dof.hpp"
 #include "ema/acquisition/simulator.hpp"
@@ -129,6 +131,46 @@ TEST(Impact, ImpactLevelSpreadRejected) {
   const ProcessedTest p = AnalyseImpacts(AssembleHammerMeasurement(sets));
   for (int k = 0; k < 5; ++k) EXPECT_EQ(p.impacts[k].accepted, k != 2);
   EXPECT_THAT(p.impacts[2].reason, HasSubstr("impact level"));
+}
+
+TEST(Impact, PreTriggerNoiseOfAWeakChannelIsNotMotion) {
+  // One response, then the same response with something added over the whole record at 4 % of
+  // its peak (twice the 2 % rms limit): white noise (a weakly excited channel of a noisy test)
+  // keeps every impact; a 30 Hz swing (the structure still moving, sampled at 4096 Hz: lag-one
+  // autocorrelation cos(2π·30/4096) = 0.999) drops every one with the reason.
+  const auto sys = testing::MakeThreeDof();
+  HammerTestPlan plan;
+  plan.references = {{1, 3}};
+  plan.roving_sets = {{{3, 3}}};
+  plan.samples_per_record = 4096;
+  plan.response_noise = 0.0;
+  const std::vector<TimeRecord> clean = SimulateHammerTest({sys.truth}, plan);
+  auto with = [&](bool motion) {
+    std::vector<TimeRecord> records = clean;
+    std::mt19937 rng(7);
+    std::normal_distribution<double> g;
+    for (TimeRecord& r : records) {
+      if (r.channel == r.reference) continue;  // the force record
+      double peak = 0.0;
+      for (double v : r.samples) peak = std::max(peak, std::abs(v));
+      for (size_t i = 0; i < r.samples.size(); ++i)
+        r.samples[i] += 0.04 * peak *
+                        (motion ? std::sqrt(2.0) * std::sin(2.0 * 3.14159265358979 * 30.0 * i * r.sample_interval_s)
+                                : g(rng));
+    }
+    std::vector<RecordSet> sets{{"t.unv", records}};
+    return AnalyseImpacts(AssembleHammerMeasurement(sets));
+  };
+  const ProcessedTest noisy = with(false), moving = with(true);
+  ASSERT_FALSE(noisy.impacts.empty());
+  for (const ImpactAnalysis& a : noisy.impacts) {
+    EXPECT_TRUE(a.accepted) << a.reason;
+    for (const std::string& why : a.response_rejections) EXPECT_EQ(why, "");
+  }
+  for (const ImpactAnalysis& a : moving.impacts) {
+    ASSERT_EQ(a.response_rejections.size(), 1u);
+    EXPECT_THAT(a.response_rejections[0], HasSubstr("was moving before the impact"));
+  }
 }
 
 }  // namespace

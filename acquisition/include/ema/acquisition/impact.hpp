@@ -30,7 +30,11 @@ struct ImpactOptions {
   double overload_fraction = 0.95;     ///< peak above this × full scale (when known) = overload
   int flat_top_run = 3;                ///< this many consecutive samples at the extreme = clipped
   double level_tolerance = 0.5;        ///< reject peak force off the point's median by more than this fraction
-  double pretrigger_motion = 0.02;     ///< pre-trigger response rms above this × its peak = still moving
+  double pretrigger_motion = 0.02;     ///< pre-trigger response rms above this × its peak = still moving ...
+  /// ... when the pre-trigger is also slow: its lag-one autocorrelation above this (motion sampled
+  /// well above its frequency is near 1; white sensor noise near 0, and a weakly excited channel's
+  /// noise alone can pass the rms limit).
+  double pretrigger_motion_correlation = 0.5;
 };
 
 /// Findings for one impact (aligned with HammerMeasurement::impacts).
