@@ -8,6 +8,7 @@
 #include <boost/program_options.hpp>
 #include <iosfwd>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ema::cli {
@@ -44,6 +45,16 @@ void RefuseOutputsOverInputs(const std::vector<PathArg>& inputs, const std::vect
 /// (`ema diagnose --test SETUP=MODES.unv`) counts as PATH when NAME=PATH is not itself a file.
 void RefuseOutputsOverInputs(const po::variables_map& vm, const std::vector<std::string>& input_options,
                              const std::vector<std::string>& output_options);
+
+/// A finite number given to `option`; UsageError "OPTION: expected a number, got 'TEXT'".
+double ParseNumber(const std::string& text, const std::string& option);
+
+/// `--band LO:HI` in Hz with 0 <= LO < HI; UsageError naming `option` otherwise.
+std::pair<double, double> ParseBand(const std::string& text, const std::string& option = "--band");
+
+/// `value` with `digits` decimals ("%.*f"), or `not_finite` for NaN and infinities (the tables
+/// of the CLI print "-" or "–" where a value does not exist).
+std::string FormatFixed(double value, int digits, const std::string& not_finite = "-");
 
 /// True when stderr is a terminal (progress bars are drawn only then).
 bool StderrIsTerminal();

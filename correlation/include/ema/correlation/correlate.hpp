@@ -19,6 +19,14 @@ struct CorrelationOptions {
   /// Test damping ratio above which a mode is remarked "interface-dominated" (thesis §7.5:
   /// the modes governed by the air film/joints showed 1–5 % damping, the structure < 1 %).
   double interface_damping_ratio = 0.01;
+
+  /// True when every option is in range; else false with the violated condition in *why.
+  bool IsValid(std::string* why) const {
+    if (!pairing.IsValid(why)) return false;
+    if (!(dofs.tolerance_m >= 0.0)) return *why = "dofs.tolerance_m (--tolerance) must be >= 0", false;
+    if (!(interface_damping_ratio >= 0.0)) return *why = "interface_damping_ratio (--interface-damping) must be >= 0", false;
+    return true;
+  }
 };
 
 /// One row of the validation table.
