@@ -1,6 +1,7 @@
 // Helpers shared by the subcommands of the `ema` CLI.
 //
-// Exit codes (cli.md): 0 success, 1 bad input (ema::InputError), 2 bad usage (ema::UsageError).
+// Exit codes (cli.md, docs/cli.md): 0 success, 1 bad input (ema::InputError), 2 bad usage
+// (ema::UsageError), 3 a solver did not converge (ema::ConvergenceError).
 // Each subcommand is `int Run<Name>(const std::vector<std::string>& args)`, where args excludes
 // the program and command names; main() catches everything.
 #pragma once

@@ -123,6 +123,7 @@ app::FitStageResult app::RunFitStage(const FitConfig& config, const FrfSet& frfs
   }
   formats::WriteModeSet(config.output, fit.modes);
   stage.stored_modes = formats::StoredModeSet(fit.modes, config.output);
+  stage.refine = fit_options.refine;
   if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, stage.modes_json.dump(2) + "\n");
   if (!config.stabilisation_path.empty())
     formats::WriteTextFileAtomically(config.stabilisation_path, stage.stabilisation_json.dump(1) + "\n");

@@ -25,7 +25,7 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/model_file.hpp"
-#include "project_file.hpp"
+#include "ema/formats/project_file.hpp"
 #include "quality_json.hpp"
 #include "report.hpp"
 #include "run_history.hpp"
@@ -157,13 +157,13 @@ struct TestFiles {
 };
 
 // Every file `ema run` writes (docs/project-file.md), for cli.md's "outputs never replace inputs".
-std::vector<cli::PathArg> RunOutputs(const fs::path& out, const app::Project& project) {
+std::vector<cli::PathArg> RunOutputs(const fs::path& out, const formats::Project& project) {
   std::vector<cli::PathArg> o = {{"-o", out.string()}};
   auto add = [&](const fs::path& p) { o.push_back({"-o", p.string()}); };
   for (const char* name : {"diagnosis.json", "updated-model.toml", "report.html", "summary.txt", "history.json"})
     add(out / name);
   add(out / "logs" / "diagnose.txt");
-  for (const app::ProjectTest& test : project.tests) {
+  for (const formats::ProjectTest& test : project.tests) {
     const TestFiles f(out / test.name);
     for (const fs::path& p : {f.modes, f.modes_json, f.stabilisation, f.model_before, f.model_before_json, f.corr_before,
                               f.corr_before_table, f.model_after, f.model_after_json, f.corr_after, f.corr_after_table})
@@ -227,13 +227,13 @@ int RunRun(const std::vector<std::string>& args) {
   po::variables_map vm;
   if (!cli::Parse(args, "ema run PROJECT.toml [-o OUTDIR]", options, positional, &vm)) return 0;
 
-  const app::Project project = app::ReadProjectFile(vm["project"].as<std::string>());
+  const formats::Project project = formats::ReadProjectFile(vm["project"].as<std::string>());
   const fs::path out = vm["output"].as<std::string>();
   cli::RefuseOutputsOverInputs({{"", project.file.string()}}, RunOutputs(out, project));
   std::error_code ec;
   fs::create_directories(out / "logs", ec);
   if (ec) throw InputError(out.string(), "cannot create the output folder: " + ec.message());
-  for (const app::ProjectTest& test : project.tests) fs::create_directories(out / test.name);
+  for (const formats::ProjectTest& test : project.tests) fs::create_directories(out / test.name);
 
   const fs::path diagnosis_json = out / "diagnosis.json", updated_model = out / "updated-model.toml";
   const int steps_per_test = 6;  // frf, fit, model, correlate, model (after), correlate (after)
@@ -256,7 +256,7 @@ int RunRun(const std::vector<std::string>& args) {
 
   // frf → fit → model → correlate (before), per test.
   for (std::size_t t = 0; t < project.tests.size(); ++t) {
-    const app::ProjectTest& test = project.tests[t];
+    const formats::ProjectTest& test = project.tests[t];
     TestResults& r = results[t];
     const TestFiles f(out / test.name);
     const std::string tag = test.name + ": ";
@@ -378,7 +378,7 @@ int RunRun(const std::vector<std::string>& args) {
 
   // model → correlate (after), per test.
   for (std::size_t t = 0; t < project.tests.size(); ++t) {
-    const app::ProjectTest& test = project.tests[t];
+    const formats::ProjectTest& test = project.tests[t];
     TestResults& r = results[t];
     const TestFiles f(out / test.name);
     const std::string tag = test.name + ": ";
@@ -434,19 +434,20 @@ int RunRun(const std::vector<std::string>& args) {
   int n_before = 0, n_after = 0;
   const std::vector<Node> geometry = nominal ? ModelPoints(*nominal) : std::vector<Node>();
   for (std::size_t t = 0; t < project.tests.size(); ++t) {
-    const app::ProjectTest& test = project.tests[t];
+    const formats::ProjectTest& test = project.tests[t];
     TestResults& r = results[t];
     report::SetupResults s;
     s.name = test.name;
     s.frf_summary = r.frf_summary;
     if (r.fit) {
       s.stabilisation = r.fit->stabilisation_json;
-      s.test_modes = r.fit->modes_json;
+      s.fit = r.fit->fit;
+      s.refine = r.fit->refine;
+      if (r.correlation_before && r.model_before)
+        s.correlation_before = report::CorrelationView{r.correlation_before->result, r.fit->stored_modes, r.model_before->solution.modes};
+      if (r.correlation_after && r.model_after)
+        s.correlation_after = report::CorrelationView{r.correlation_after->result, r.fit->stored_modes, r.model_after->solution.modes};
     }
-    if (r.model_before) s.model_modes_before = r.model_before->json;
-    if (r.model_after) s.model_modes_after = r.model_after->json;
-    if (r.correlation_before) s.correlation_before = r.correlation_before->json;
-    if (r.correlation_after) s.correlation_after = r.correlation_after->json;
     s.geometry = geometry;
     s.lines = project.lines;
     if (project.band_hz) {
@@ -473,22 +474,26 @@ int RunRun(const std::vector<std::string>& args) {
     } else if (s.frfs) {
       frf_count = s.frfs->OutputCount() * s.frfs->ReferenceCount();
     }
-    const int modes = s.test_modes.contains("modes") ? static_cast<int>(s.test_modes["modes"].size()) : 0;
-    const std::string before = Fixed(Get(s.correlation_before, {"summary", "mean_agreement_pct"}), 1) + " % / " +
-                               Fixed(Get(s.correlation_before, {"summary", "mean_mac"}), 3);
-    const std::string after = Fixed(Get(s.correlation_after, {"summary", "mean_agreement_pct"}), 1) + " % / " +
-                              Fixed(Get(s.correlation_after, {"summary", "mean_mac"}), 3);
+    const int modes = r.fit ? static_cast<int>(r.fit->fit.modes.modes.size()) : 0;
+    // Mean agreement and MAC of a correlation; NaN when it does not exist.
+    auto means = [](const std::optional<app::CorrelateStageResult>& c) {
+      return c ? std::make_pair(c->result.mean_agreement_pct, c->result.mean_mac) : std::make_pair(kNaN, kNaN);
+    };
+    const auto [agreement_nominal, mac_nominal] = means(r.correlation_before);
+    const auto [agreement_updated, mac_updated] = means(r.correlation_after);
+    const std::string before = Fixed(agreement_nominal, 1) + " % / " + Fixed(mac_nominal, 3);
+    const std::string after = Fixed(agreement_updated, 1) + " % / " + Fixed(mac_updated, 3);
     std::snprintf(line, sizeof line, "  %-12s %5d %8d %6d  %-22s %-22s", test.name.c_str(), frf_count, rejected, modes,
                   before.c_str(), after.c_str());
     summary.push_back(line);
-    if (const double a = Get(s.correlation_before, {"summary", "mean_agreement_pct"}); std::isfinite(a)) {
-      agree_before += a;
-      mac_before += Get(s.correlation_before, {"summary", "mean_mac"});
+    if (std::isfinite(agreement_nominal)) {
+      agree_before += agreement_nominal;
+      mac_before += mac_nominal;
       ++n_before;
     }
-    if (const double a = Get(s.correlation_after, {"summary", "mean_agreement_pct"}); std::isfinite(a)) {
-      agree_after += a;
-      mac_after += Get(s.correlation_after, {"summary", "mean_mac"});
+    if (std::isfinite(agreement_updated)) {
+      agree_after += agreement_updated;
+      mac_after += mac_updated;
       ++n_after;
     }
     input.setups.push_back(std::move(s));

@@ -58,6 +58,7 @@ struct FitStageResult {
   nlohmann::json modes_json;         ///< `ema fit --json`
   nlohmann::json stabilisation_json; ///< `ema fit --stabilisation` (with CMIF/MMIF)
   ModeSet stored_modes;              ///< what the modes file holds (formats::StoredModeSet)
+  curvefit::RefineMethod refine = curvefit::RefineMethod::kMl;  ///< as configured
 };
 
 /// `require_input` false: only options (the `args` of a project file's [fit]).

@@ -16,7 +16,7 @@
 
 #include "browser_check.hpp"
 #include "ema/core/error.hpp"
-#include "project_file.hpp"
+#include "ema/formats/project_file.hpp"
 
 namespace ema {
 namespace {
@@ -207,7 +207,7 @@ TEST(RunProjectFile, BadInputNamesFileLineAndKey) {
   write("model.toml", "[model]\nname = \"x\"\n");
   const fs::path unknown = write("unknown.toml", "[project]\nmodel = \"model.toml\"\ncolour = 3\n");
   try {
-    app::ReadProjectFile(unknown);
+    formats::ReadProjectFile(unknown);
     FAIL() << "unknown key accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("unknown.toml:3"), std::string::npos) << e.what();
@@ -215,13 +215,13 @@ TEST(RunProjectFile, BadInputNamesFileLineAndKey) {
   }
   const fs::path missing = write("missing.toml", "[project]\nmodel = \"model.toml\"\n[[test]]\ntime = [\"nope.unv\"]\n");
   try {
-    app::ReadProjectFile(missing);
+    formats::ReadProjectFile(missing);
     FAIL() << "missing data file accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("nope.unv"), std::string::npos) << e.what();
   }
   const fs::path no_tests = write("notests.toml", "[project]\nmodel = \"model.toml\"\n");
-  EXPECT_THROW(app::ReadProjectFile(no_tests), InputError);
+  EXPECT_THROW(formats::ReadProjectFile(no_tests), InputError);
   // Through the CLI: exit 1 for bad input, 2 for bad usage, and nothing written.
   EXPECT_EQ(RunEma("run '" + unknown.string() + "' -o '" + (dir / "out").string() + "'", dir / "log1.txt"), 1);
   EXPECT_FALSE(fs::exists(dir / "out"));

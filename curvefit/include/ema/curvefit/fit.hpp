@@ -81,6 +81,12 @@ struct ModalModel {
 /// The model's FRF from reference i to output o (FitData indices) at `frequency_hz`.
 Eigen::VectorXcd SynthesiseFrf(const ModalModel& model, int output, int reference, const Eigen::VectorXd& frequency_hz);
 
+/// The model's FRF from `reference` to `response` named as the measured FRF set names them
+/// (reciprocity undone when `transposed`), on the lines with f > 0 inside the model's band; NaN
+/// elsewhere, and on every line when the model does not hold that FRF (nothing is re-fitted).
+Eigen::VectorXcd SynthesiseMeasuredFrf(const ModalModel& model, const Dof& response, const Dof& reference,
+                                       const Eigen::VectorXd& frequency_hz);
+
 /// Seconds; stage figures are CPU times of the calling thread (see PolymaxTiming).
 struct FitTiming {
   PolymaxTiming polymax;
