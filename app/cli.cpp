@@ -138,13 +138,6 @@ std::pair<double, double> ParseBand(const std::string& text, const std::string& 
   return {lo, hi};
 }
 
-std::string FormatFixed(double value, int digits, const std::string& not_finite) {
-  if (!std::isfinite(value)) return not_finite;
-  char text[64];
-  std::snprintf(text, sizeof text, "%.*f", digits, value);
-  return text;
-}
-
 int NotBuiltYet(const std::string& command, const std::string& issue) {
   std::cerr << "ema " << command << ": not built yet (" << issue << ")\n";
   return 2;

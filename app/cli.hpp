@@ -7,7 +7,7 @@
 #pragma once
 
 #include <boost/program_options.hpp>
-#include <iosfwd>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -47,15 +47,20 @@ void RefuseOutputsOverInputs(const std::vector<PathArg>& inputs, const std::vect
 void RefuseOutputsOverInputs(const po::variables_map& vm, const std::vector<std::string>& input_options,
                              const std::vector<std::string>& output_options);
 
+/// An option bound to `*field` whose default is the value the field holds (the options struct is
+/// the single source of defaults; --help shows it as "%g" prints it).
+template <class T>
+po::typed_value<T>* Defaulted(T* field) {
+  std::ostringstream text;
+  text << *field;
+  return po::value(field)->default_value(*field, text.str());
+}
+
 /// A finite number given to `option`; UsageError "OPTION: expected a number, got 'TEXT'".
 double ParseNumber(const std::string& text, const std::string& option);
 
 /// `--band LO:HI` in Hz with 0 <= LO < HI; UsageError naming `option` otherwise.
 std::pair<double, double> ParseBand(const std::string& text, const std::string& option = "--band");
-
-/// `value` with `digits` decimals ("%.*f"), or `not_finite` for NaN and infinities (the tables
-/// of the CLI print "-" or "–" where a value does not exist).
-std::string FormatFixed(double value, int digits, const std::string& not_finite = "-");
 
 /// True when stderr is a terminal (progress bars are drawn only then).
 bool StderrIsTerminal();

@@ -11,6 +11,7 @@
 #include "amplitude_levels.hpp"
 #include "cli.hpp"
 #include "ema/core/error.hpp"
+#include "ema/core/text.hpp"
 #include "ema/diagnose/diagnose.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
@@ -34,7 +35,7 @@ std::pair<std::string, std::string> SplitSetup(const std::string& text) {
 }
 
 // The tables of `ema diagnose` print "–" where a value does not exist.
-std::string Fixed(double v, int digits) { return cli::FormatFixed(v, digits, "–"); }
+std::string Fixed(double v, int digits) { return FormatFixed(v, digits, "–"); }
 
 // Before/after table: every test mode of every setup, the baseline and rank-1 partners.
 std::string ModeTable(const diagnose::Candidate& before, const diagnose::Candidate& after) {

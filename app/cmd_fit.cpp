@@ -55,9 +55,9 @@ std::optional<app::FitConfig> app::ParseFitArgs(const std::vector<std::string>& 
       ("method", po::value(&method), "polymax (default) or peak (peak picking, half-power damping)")
       ("refine", po::value(&refine), "ml (default): maximum-likelihood refinement of the poles and residues with\n"
                                      "1-sigma uncertainties; none: PolyMAX/LSFD values (sigma still estimated)")
-      ("freq-tol", po::value(&fit_options.stability.frequency_tol), "frequency stability tolerance (default 0.01)")
-      ("damping-tol", po::value(&fit_options.stability.damping_tol), "damping stability tolerance (default 0.05)")
-      ("mac-min", po::value(&fit_options.stability.mac_min), "vector stability: minimum MAC (default 0.98)")
+      ("freq-tol", cli::Defaulted(&fit_options.stability.frequency_tol), "frequency stability tolerance")
+      ("damping-tol", cli::Defaulted(&fit_options.stability.damping_tol), "damping stability tolerance")
+      ("mac-min", cli::Defaulted(&fit_options.stability.mac_min), "vector stability: minimum MAC")
       ("threads", po::value(&threads), "threads for the per-order stage (default: all cores)");
   cli::AddHelp(&options);
   po::positional_options_description positional;
@@ -68,14 +68,14 @@ std::optional<app::FitConfig> app::ParseFitArgs(const std::vector<std::string>& 
 
   if (!curvefit::StringToRefineMethod(refine, &fit_options.refine))
     throw UsageError("--refine: expected ml or none, got '" + refine + "'");
-  if (method == "peak") fit_options.method = curvefit::FitMethod::kPeak;
-  else if (method != "polymax") throw UsageError("--method: expected polymax or peak, got '" + method + "'");
+  if (!FromName(curvefit::kFitMethodNames, method, &fit_options.method))
+    throw UsageError("--method: expected " + NameList(curvefit::kFitMethodNames) + ", got '" + method + "'");
   if (!band.empty()) std::tie(fit_options.data.band_lo_hz, fit_options.data.band_hi_hz) = cli::ParseBand(band);
   if (vm.count("order-max") && order_max < 1) throw UsageError("--order-max: expected a positive order");
   fit_options.polymax.order_max = order_max;
-  if (threads < 0) throw UsageError("--threads: expected 0 (all cores) or a positive count");
   fit_options.polymax.threads = threads;
   fit_options.select_frequencies_hz = ParseSelect(select);
+  if (std::string why; !fit_options.IsValid(&why)) throw UsageError(why);
   if (!config.plot_path.empty() && !IsSupportedPlotPath(config.plot_path))
     throw UsageError("--plot: expected a .svg or .png file name, got '" + config.plot_path + "'");
   if (fit_options.method == curvefit::FitMethod::kPeak && (!config.stabilisation_path.empty() || !config.plot_path.empty()))

@@ -187,23 +187,23 @@ std::optional<app::FrfConfig> app::ParseFrfArgs(const std::vector<std::string>& 
   options.add_options()
       ("input", po::value(&config.inputs)->required()->multitoken(), "time-data files (one per roving set)")
       ("output,o", po::value(&config.output)->required(), "FRFs out (UFF 58: function type 4 FRFs, type 6 coherences)")
-      ("estimator", po::value(&estimator), "H1 (default), H2 or Hv")
+      ("estimator", po::value(&estimator)->default_value(estimator), "H1, H2 or Hv")
       ("json", po::value(&config.json_path), "summary as JSON (cli.md layout)")
       ("band", po::value(&band), "keep lines in LO:HI Hz (default: 0 to Nyquist)")
-      ("exp-window", po::value(&exp_window),
-       "auto (default: only when a response still rings at the record end), none, or a decay rate 1/tau in 1/s")
-      ("exp-end-level", po::value(&imp.exp_end_level), "auto window: end level as a fraction (default 0.01)")
+      ("exp-window", po::value(&exp_window)->default_value(exp_window),
+       "auto (only when a response still rings at the record end), none, or a decay rate 1/tau in 1/s")
+      ("exp-end-level", cli::Defaulted(&imp.exp_end_level), "auto window: end level as a fraction")
       ("quantity", po::value(&quantity), "output FRF type: accelerance, mobility or receptance (default: as measured)")
-      ("trigger-level", po::value(&imp.trigger_level), "trigger as a fraction of the force peak (default 0.10)")
-      ("force-window", po::value(&imp.force_window_pulses), "force window: pulse end + this many contact times (default 3)")
-      ("double-hit-ratio", po::value(&imp.double_hit_high),
-       "double hit: a second pulse above this fraction of the first (default 0.07)")
-      ("double-hit-autocorrelation", po::value(&imp.double_hit_autocorrelation),
-       "double hit: force autocorrelation secondary peak above this (default 0.05)")
+      ("trigger-level", cli::Defaulted(&imp.trigger_level), "trigger as a fraction of the force peak")
+      ("force-window", cli::Defaulted(&imp.force_window_pulses), "force window: pulse end + this many contact times")
+      ("double-hit-ratio", cli::Defaulted(&imp.double_hit_high),
+       "double hit: a second pulse above this fraction of the first")
+      ("double-hit-autocorrelation", cli::Defaulted(&imp.double_hit_autocorrelation),
+       "double hit: force autocorrelation secondary peak above this")
       ("accept-double-hits", po::bool_switch(&accept_double_hits), "keep double hits (force window spans every pulse)")
-      ("overload-fraction", po::value(&imp.overload_fraction), "overload: peak above this fraction of full scale (default 0.95)")
-      ("level-tolerance", po::value(&imp.level_tolerance),
-       "reject impacts whose peak force is off the point's median by more than this fraction (default 0.5)")
+      ("overload-fraction", cli::Defaulted(&imp.overload_fraction), "overload: peak above this fraction of full scale")
+      ("level-tolerance", cli::Defaulted(&imp.level_tolerance),
+       "reject impacts whose peak force is off the point's median by more than this fraction")
       ("threads", po::value(&opt.threads), "threads for the transforms (default: all cores; results do not depend on it)")
       ("binary", po::bool_switch(&config.binary), "write 58b (binary) records")
       ("force-bins", po::value(&config.force_bins),
@@ -224,28 +224,16 @@ std::optional<app::FrfConfig> app::ParseFrfArgs(const std::vector<std::string>& 
     throw UsageError(std::string("--estimator: ") + e.what());
   }
   if (!band.empty()) std::tie(opt.band_lo_hz, opt.band_hi_hz) = cli::ParseBand(band);
-  if (exp_window == "auto") {
-    imp.exp_window = acquisition::ExpWindowMode::kAuto;
-  } else if (exp_window == "none") {
-    imp.exp_window = acquisition::ExpWindowMode::kNone;
-  } else {
+  // --exp-window: a mode's name (acquisition::kExpWindowNames), else a fixed decay rate.
+  if (!FromName(acquisition::kExpWindowNames, exp_window, &imp.exp_window)) {
     imp.exp_window = acquisition::ExpWindowMode::kFixed;
     imp.exp_decay_rate = cli::ParseNumber(exp_window, "--exp-window");
-    if (imp.exp_decay_rate < 0.0) throw UsageError("--exp-window: the decay rate must be >= 0");
   }
-  if (!(imp.exp_end_level > 0.0 && imp.exp_end_level < 1.0)) throw UsageError("--exp-end-level: expected 0 < level < 1");
-  if (!(imp.trigger_level > 0.0 && imp.trigger_level < 1.0)) throw UsageError("--trigger-level: expected 0 < level < 1");
-  if (opt.threads < 0) throw UsageError("--threads: expected 0 (all cores) or a positive count");
-  if (!(imp.double_hit_high > 0.0 && imp.double_hit_high < 1.0))
-    throw UsageError("--double-hit-ratio: expected 0 < ratio < 1");
   imp.double_hit_low = std::min(imp.double_hit_low, 0.5 * imp.double_hit_high);
   imp.reject_double_hits = !accept_double_hits;
-  if (!quantity.empty()) {
-    if (quantity == "accelerance") opt.output_quantity = Quantity::kAcceleration;
-    else if (quantity == "mobility") opt.output_quantity = Quantity::kVelocity;
-    else if (quantity == "receptance") opt.output_quantity = Quantity::kDisplacement;
-    else throw UsageError("--quantity: expected accelerance, mobility or receptance, got '" + quantity + "'");
-  }
+  if (!quantity.empty() && !FromName(frf::kOutputQuantityNames, quantity, &opt.output_quantity))
+    throw UsageError("--quantity: expected " + NameList(frf::kOutputQuantityNames) + ", got '" + quantity + "'");
+  if (std::string why; !opt.IsValid(&why)) throw UsageError(why);
 
   if (vm.count("force-bins") && !force_bin_edges.empty()) throw UsageError("give --force-bins or --force-bin-edges, not both");
   if (vm.count("force-bins") && config.force_bins < 1) throw UsageError("--force-bins: expected a positive number of bins");

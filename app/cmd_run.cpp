@@ -22,6 +22,7 @@
 
 #include "cli.hpp"
 #include "ema/core/error.hpp"
+#include "ema/core/text.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/model_file.hpp"
@@ -91,7 +92,7 @@ class StepRunner {
 };
 
 // The summary's numbers: "-" where a value does not exist.
-std::string Fixed(double value, int digits) { return cli::FormatFixed(value, digits, "-"); }
+std::string Fixed(double value, int digits) { return FormatFixed(value, digits, "-"); }
 
 double Get(const json& j, std::initializer_list<const char*> keys) {
   const json* node = &j;

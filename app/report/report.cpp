@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <map>
 
+#include "ema/core/text.hpp"
 #include "ema/formats/json_codecs.hpp"
 #include "embedded_assets.hpp"
 #include "report_quality.hpp"
@@ -211,20 +212,6 @@ json StabilisationData(const SetupResults& setup) {
 std::string ScriptSafe(std::string text) {
   for (size_t at = text.find("</"); at != std::string::npos; at = text.find("</", at + 3)) text.replace(at, 2, "<\\/");
   return text;
-}
-
-std::string HtmlEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 }  // namespace

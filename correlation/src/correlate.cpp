@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "ema/core/error.hpp"
+#include "ema/core/text.hpp"
 #include "ema/correlation/mac.hpp"
 
 namespace ema::correlation {
@@ -22,25 +23,8 @@ void CheckModeSet(const ModeSet& set, const char* role) {
                                   " shape values, expected one per DOF (" + std::to_string(set.dofs.size()) + ")");
 }
 
-std::string Fixed(double value, int digits) {
-  if (std::isnan(value)) return "";
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
-  return buffer;
-}
-
-std::string HtmlEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+// The validation table leaves a cell empty where a value does not exist.
+std::string Fixed(double value, int digits) { return FormatFixed(value, digits, ""); }
 
 }  // namespace
 
