@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <map>
 #include <memory>
 #include <set>
@@ -20,6 +21,7 @@
 #include "ema/model/effects.hpp"
 #include "ema/model/law_force.hpp"
 #include "ema/model/solve.hpp"
+#include "stages.hpp"
 
 namespace ema {
 namespace {
@@ -40,8 +42,9 @@ class LawRestoringForce : public acquisition::RestoringForce {
 /// integration = "time": per roving set the model (with that set's sensor masses) is assembled
 /// at its operating point; every spring whose law is non-linear in time becomes a non-linear
 /// element about that point; impacts are integrated in time (docs/plan-format.md).
-int SimulateInTime(const model::Model& input, const formats::Plan& plan, const std::string& model_path,
-                   const std::string& plan_path, const std::string& out_path, bool binary) {
+std::vector<TimeRecord> SimulateInTime(const model::Model& input, const formats::Plan& plan, const std::string& model_path,
+                                       const std::string& plan_path, const std::string& out_path, bool binary,
+                                       std::ostream& out) {
   const model::Model m = input.effects.empty() ? input : model::ApplyEffects(input);
   std::map<int, const model::TestPoint*> points;
   for (const model::TestPoint& p : m.points) points[p.id] = &p;
@@ -139,38 +142,39 @@ int SimulateInTime(const model::Model& input, const formats::Plan& plan, const s
   wo.binary = binary;
   formats::WriteTimeRecords(out_path, records, wo);
   cli::DrawProgress(1.0, "done");
-  std::cout << "simulated " << records.size() << " records in time (" << nonlinear << " non-linear element(s)): "
+  out << "simulated " << records.size() << " records in time (" << nonlinear << " non-linear element(s)): "
             << plan.sets.size() << " roving set(s), " << plan.hammer.references.size() << " reference(s), "
             << plan.hammer.impacts_per_reference << " impacts each at " << levels.size() << " force level(s)\n";
-  return 0;
+  return records;
 }
 
 }  // namespace
 
-int RunSimulate(const std::vector<std::string>& args) {
+std::optional<app::SimulateConfig> app::ParseSimulateArgs(const std::vector<std::string>& args) {
   namespace po = cli::po;
   po::options_description options("ema simulate options");
-  std::string model_path, plan_path, out_path, setup;
+  SimulateConfig config;
   cli::AddHelp(&options);
-  options.add_options()                                                                   //
-      ("model", po::value(&model_path)->required(), "model file (TOML)")                  //
-      ("plan", po::value(&plan_path)->required(), "test plan (TOML, docs/plan-format.md)")  //
-      ("output,o", po::value(&out_path)->required(), "time data, UFF 58")                  //
-      ("setup", po::value(&setup), "model setup (overrides the plan's setup)")             //
-      ("binary", po::bool_switch(), "write UFF 58b (binary)");
+  options.add_options()                                                                          //
+      ("model", po::value(&config.model_path)->required(), "model file (TOML)")                  //
+      ("plan", po::value(&config.plan_path)->required(), "test plan (TOML, docs/plan-format.md)")  //
+      ("output,o", po::value(&config.output)->required(), "time data, UFF 58")                  //
+      ("setup", po::value(&config.setup), "model setup (overrides the plan's setup)")           //
+      ("binary", po::bool_switch(&config.binary), "write UFF 58b (binary)");
   po::positional_options_description positional;
   positional.add("model", 1);
   po::variables_map vm;
   if (!cli::Parse(args, "ema simulate MODEL.toml --plan PLAN.toml -o TIME.unv [--setup NAME] [--binary]", options,
                   positional, &vm))
-    return 0;
+    return std::nullopt;
   cli::RefuseOutputsOverInputs(vm, {"model", "plan"}, {"output"});
-  const model::Model m = formats::ReadModelFile(model_path);
-  std::error_code exists_ec;
-  if (!std::filesystem::exists(plan_path, exists_ec)) throw InputError(plan_path, "plan file not found");
-  formats::Plan plan = formats::ReadPlanFile(plan_path);
-  if (!setup.empty()) plan.setup = setup;
+  return config;
+}
 
+std::vector<TimeRecord> app::RunSimulateStage(const SimulateConfig& config, const model::Model& m, formats::Plan plan,
+                                              std::ostream& out) {
+  const std::string &model_path = config.model_path, &plan_path = config.plan_path, &out_path = config.output;
+  if (!config.setup.empty()) plan.setup = config.setup;
   std::map<int, const model::TestPoint*> points;
   for (const model::TestPoint& p : m.points) points[p.id] = &p;
   auto require_point = [&](const Dof& d, const std::string& what) {
@@ -180,7 +184,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   };
   for (const Dof& r : plan.hammer.references) require_point(r, "reference");
 
-  if (plan.time_integration) return SimulateInTime(m, plan, model_path, plan_path, out_path, vm["binary"].as<bool>());
+  if (plan.time_integration) return SimulateInTime(m, plan, model_path, plan_path, out_path, config.binary, out);
 
   std::vector<acquisition::ModalTruth> truths;
   for (std::size_t s = 0; s < plan.sets.size(); ++s) {
@@ -216,13 +220,23 @@ int RunSimulate(const std::vector<std::string>& args) {
   }
   const std::vector<TimeRecord> records = acquisition::SimulateHammerTest(truths, plan.hammer);
   formats::WriteOptions wo;
-  wo.binary = vm["binary"].as<bool>();
+  wo.binary = config.binary;
   formats::WriteTimeRecords(out_path, records, wo);
   cli::DrawProgress(1.0, "done");
-  std::cout << "simulated " << records.size() << " records: " << plan.sets.size() << " roving set(s), "
+  out << "simulated " << records.size() << " records: " << plan.sets.size() << " roving set(s), "
             << plan.hammer.references.size() << " reference(s), " << plan.hammer.impacts_per_reference
             << " impacts each" << (plan.hammer.force_levels_n.empty() ? "" : " per force level") << ", "
             << truths.front().poles.size() << " modes\n";
+  return records;
+}
+
+int RunSimulate(const std::vector<std::string>& args) {
+  const std::optional<app::SimulateConfig> config = app::ParseSimulateArgs(args);
+  if (!config) return 0;
+  const model::Model model = formats::ReadModelFile(config->model_path);
+  std::error_code exists_ec;
+  if (!std::filesystem::exists(config->plan_path, exists_ec)) throw InputError(config->plan_path, "plan file not found");
+  app::RunSimulateStage(*config, model, formats::ReadPlanFile(config->plan_path), std::cout);
   return 0;
 }
 

@@ -13,10 +13,15 @@
 #include <vector>
 
 #include "ema/core/types.hpp"
+#include "ema/correlation/amplitude.hpp"
 #include "ema/correlation/correlate.hpp"
+#include "ema/curvefit/complexity.hpp"
 #include "ema/curvefit/fit.hpp"
 #include "ema/diagnose/diagnose.hpp"
 #include "ema/frf/hammer_frf.hpp"
+#include "ema/formats/info.hpp"
+#include "ema/formats/plan_file.hpp"
+#include "ema/frf/quality.hpp"
 #include "ema/model/model.hpp"
 #include "ema/model/solve.hpp"
 
@@ -121,5 +126,61 @@ struct DiagnoseStageResult {
 std::optional<DiagnoseConfig> ParseDiagnoseArgs(const std::vector<std::string>& args, bool require_inputs = true);
 DiagnoseStageResult RunDiagnoseStage(const DiagnoseConfig& config, const model::Model& model,
                                      const std::vector<diagnose::SetupModes>& tests, std::ostream& out);
+
+// ---- ema quality ----
+
+struct QualityConfig {
+  std::vector<std::string> inputs;   ///< FRF files (names in messages and the report)
+  std::string modes_path, json_path;
+  frf::QualityOptions quality;
+  curvefit::ComplexityOptions complexity;
+};
+
+struct QualityStageResult {
+  frf::FrfQualityReport frfs;
+  std::vector<curvefit::ModeComplexityCheck> modes;
+  nlohmann::json json;               ///< `ema quality --json`
+};
+
+std::optional<QualityConfig> ParseQualityArgs(const std::vector<std::string>& args);
+/// Checks `sets` (one per input) and, when given, the complexity of `modes`.
+QualityStageResult RunQualityStage(const QualityConfig& config, const std::vector<FrfSet>& sets,
+                                   const std::optional<ModeSet>& modes, std::ostream& out);
+
+// ---- ema info ----
+
+struct InfoConfig {
+  std::string file, json_path;
+};
+
+std::optional<InfoConfig> ParseInfoArgs(const std::vector<std::string>& args);
+formats::FileSummary RunInfoStage(const InfoConfig& config, std::ostream& out);
+
+// ---- ema amplitude ----
+
+struct AmplitudeConfig {
+  std::vector<std::string> level_args;  ///< LEVEL=MODES.unv
+  correlation::LevelKind kind = correlation::LevelKind::kPeakForce;
+  std::string json_path, report_path;
+  correlation::AmplitudeOptions options;
+};
+
+std::optional<AmplitudeConfig> ParseAmplitudeArgs(const std::vector<std::string>& args);
+/// Follows the modes over `levels` (app::ReadAmplitudeLevels of config.level_args).
+correlation::AmplitudeResult RunAmplitudeStage(const AmplitudeConfig& config,
+                                               std::vector<correlation::AmplitudeLevel> levels, std::ostream& out);
+
+// ---- ema simulate ----
+
+struct SimulateConfig {
+  std::string model_path, plan_path, output;
+  std::string setup;                 ///< overrides the plan's setup when given
+  bool binary = false;
+};
+
+std::optional<SimulateConfig> ParseSimulateArgs(const std::vector<std::string>& args);
+/// Simulates the test `plan` of `model` and writes the time records (config.output).
+std::vector<TimeRecord> RunSimulateStage(const SimulateConfig& config, const model::Model& model, formats::Plan plan,
+                                         std::ostream& out);
 
 }  // namespace ema::app
