@@ -57,13 +57,8 @@ std::optional<app::CorrelateConfig> app::ParseCorrelateArgs(const std::vector<st
   if (!config.table_path.empty()) {
     std::string ext = fs::path(config.table_path).extension().string();
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext == ".csv") {
-      config.table_format = correlation::TableFormat::kCsv;
-    } else if (ext == ".html" || ext == ".htm") {
-      config.table_format = correlation::TableFormat::kHtml;
-    } else if (ext != ".md") {
+    if (!FromName(correlation::kTableFormatExtensions, ext, &config.table_format))
       throw UsageError("--table " + config.table_path + ": expected a .md, .csv or .html file name");
-    }
   }
   if (std::string why; !copt.IsValid(&why)) throw UsageError(why);
   if (!config.setup.empty() && !IsModelFile(config.model_path))

@@ -18,12 +18,7 @@ namespace {
 using json = nlohmann::json;
 
 // Five significant digits: plenty for a plot, and keeps the page small.
-double Round(double value) {
-  if (!std::isfinite(value)) return value;
-  char text[32];
-  std::snprintf(text, sizeof text, "%.5g", value);
-  return std::strtod(text, nullptr);
-}
+double Round(double value) { return RoundToDigits(value, 5); }
 
 json Rounded(const Eigen::VectorXd& values) {
   json out = json::array();

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "ema/core/names.hpp"
 #include "ema/core/types.hpp"
 #include "ema/correlation/dof_match.hpp"
 #include "ema/correlation/pairing.hpp"
@@ -68,6 +69,9 @@ struct CorrelationResult {
 CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const CorrelationOptions& options = {});
 
 enum class TableFormat { kMarkdown, kCsv, kHtml };
+/// `ema correlate --table FILE`: the format by the file's extension (lower case).
+inline constexpr EnumName<TableFormat> kTableFormatExtensions[] = {
+    {TableFormat::kMarkdown, ".md"}, {TableFormat::kCsv, ".csv"}, {TableFormat::kHtml, ".html"}, {TableFormat::kHtml, ".htm"}};
 
 /// The validation table (mode, model f, test f and damping, agreement %, Δf %, MAC, remark)
 /// followed by the COMAC list, as text in the requested format.
