@@ -35,7 +35,7 @@ std::pair<std::string, std::string> SplitSetup(const std::string& text) {
 }
 
 // The tables of `ema diagnose` print "–" where a value does not exist.
-std::string Fixed(double v, int digits) { return FormatFixed(v, digits, "–"); }
+std::string Fixed(double v, int digits) { return FixedPoint(v, digits, "–"); }
 
 // Before/after table: every test mode of every setup, the baseline and rank-1 partners.
 std::string ModeTable(const diagnose::Candidate& before, const diagnose::Candidate& after) {

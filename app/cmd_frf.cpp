@@ -224,8 +224,8 @@ std::optional<app::FrfConfig> app::ParseFrfArgs(const std::vector<std::string>& 
     throw UsageError(std::string("--estimator: ") + e.what());
   }
   if (!band.empty()) std::tie(opt.band_lo_hz, opt.band_hi_hz) = cli::ParseBand(band);
-  // --exp-window: a mode's name (acquisition::kExpWindowNames), else a fixed decay rate.
-  if (!FromName(acquisition::kExpWindowNames, exp_window, &imp.exp_window)) {
+  // --exp-window: a mode's name (frf::kExpWindowNames), else a fixed decay rate.
+  if (!FromName(frf::kExpWindowNames, exp_window, &imp.exp_window)) {
     imp.exp_window = acquisition::ExpWindowMode::kFixed;
     imp.exp_decay_rate = cli::ParseNumber(exp_window, "--exp-window");
   }

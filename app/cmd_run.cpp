@@ -92,7 +92,7 @@ class StepRunner {
 };
 
 // The summary's numbers: "-" where a value does not exist.
-std::string Fixed(double value, int digits) { return FormatFixed(value, digits, "-"); }
+std::string Fixed(double value, int digits) { return FixedPoint(value, digits, "-"); }
 
 double Get(const json& j, std::initializer_list<const char*> keys) {
   const json* node = &j;

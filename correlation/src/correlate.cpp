@@ -6,7 +6,6 @@
 #include <sstream>
 
 #include "ema/core/error.hpp"
-#include "ema/core/text.hpp"
 #include "ema/correlation/mac.hpp"
 
 namespace ema::correlation {
@@ -23,8 +22,25 @@ void CheckModeSet(const ModeSet& set, const char* role) {
                                   " shape values, expected one per DOF (" + std::to_string(set.dofs.size()) + ")");
 }
 
-// The validation table leaves a cell empty where a value does not exist.
-std::string Fixed(double value, int digits) { return FormatFixed(value, digits, ""); }
+std::string Fixed(double value, int digits) {
+  if (std::isnan(value)) return "";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
+  return buffer;
+}
+
+std::string HtmlEscape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
 
 }  // namespace
 

@@ -6,7 +6,6 @@
 #include <string>
 #include <vector>
 
-#include "ema/core/names.hpp"
 #include "ema/acquisition/hammer_test.hpp"
 
 namespace ema::acquisition {
@@ -16,8 +15,6 @@ enum class ExpWindowMode {
   kNone,   ///< never
   kFixed,  ///< ImpactOptions::exp_decay_rate
 };
-/// `ema frf --exp-window` by name (a number there is a fixed decay rate).
-inline constexpr EnumName<ExpWindowMode> kExpWindowNames[] = {{ExpWindowMode::kAuto, "auto"}, {ExpWindowMode::kNone, "none"}};
 
 struct ImpactOptions {
   double trigger_level = 0.10;         ///< trigger at this fraction of the impact's force peak (rising edge)

@@ -1,18 +1,29 @@
-// Small text helpers shared by every module that writes text for people.
+// Text helpers for every module that prints tables or HTML (the validation table, the CLI's
+// tables, the report): one fixed-point rule and one HTML escape, so that the outputs agree.
 #pragma once
 
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <string_view>
 
 namespace ema {
 
-/// `text` safe inside HTML element content and double-quoted attributes: & < > " escaped (the
-/// validation table of `ema correlate --table x.html` and the HTML report share this one rule).
-inline std::string HtmlEscape(const std::string& text) {
+/// `value` with `decimals` digits after the point (printf "%.*f"); `not_finite` for NaN and ±Inf,
+/// which each table chooses (an empty cell, "–" in Markdown, "-" in plain text).
+inline std::string FixedPoint(double value, int decimals, std::string_view not_finite = "") {
+  if (!std::isfinite(value)) return std::string(not_finite);
+  const int length = std::snprintf(nullptr, 0, "%.*f", decimals, value);  // sized: 1e300 has 301 digits
+  std::string out(static_cast<size_t>(length), '\0');
+  std::snprintf(out.data(), out.size() + 1, "%.*f", decimals, value);
+  return out;
+}
+
+/// `text` safe in HTML element content and in quoted attribute values: & < > " escaped.
+inline std::string HtmlEscape(std::string_view text) {
   std::string out;
   out.reserve(text.size());
-  for (const char c : text) {
+  for (char c : text) {
     switch (c) {
       case '&': out += "&amp;"; break;
       case '<': out += "&lt;"; break;
@@ -22,15 +33,6 @@ inline std::string HtmlEscape(const std::string& text) {
     }
   }
   return out;
-}
-
-/// `value` with `digits` decimals ("%.*f"), or `not_finite` for NaN and infinities: each table
-/// keeps its own mark for a value that does not exist ("-", "–" or an empty cell).
-inline std::string FormatFixed(double value, int digits, const std::string& not_finite) {
-  if (!std::isfinite(value)) return not_finite;
-  char text[64];
-  std::snprintf(text, sizeof text, "%.*f", digits, value);
-  return text;
 }
 
 }  // namespace ema

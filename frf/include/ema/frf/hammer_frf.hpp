@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "ema/core/names.hpp"
 #include "ema/acquisition/hammer_test.hpp"
 #include "ema/acquisition/impact.hpp"
+#include "ema/core/names.hpp"
 #include "ema/core/progress.hpp"
 #include "ema/core/types.hpp"
 #include "ema/frf/estimators.hpp"
@@ -38,6 +38,10 @@ struct FrfOptions {
     return true;
   }
 };
+
+/// `ema frf --exp-window` by name (a number there is a fixed decay rate).
+inline constexpr EnumName<acquisition::ExpWindowMode> kExpWindowNames[] = {{acquisition::ExpWindowMode::kAuto, "auto"},
+                                                                          {acquisition::ExpWindowMode::kNone, "none"}};
 
 /// `ema frf --quantity`: the FRF type to convert to.
 inline constexpr EnumName<Quantity> kOutputQuantityNames[] = {
