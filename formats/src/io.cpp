@@ -249,11 +249,11 @@ FrfSet ReadFrfSet(const std::filesystem::path& path) {
     if (f.function_type == 4) frfs.push_back({std::move(f), d.line});
     else if (f.function_type == 6) cohs.push_back({std::move(f), d.line});
   }
-  return FrfSetFromFunctions(path, frfs, cohs);
+  return FrfSetFromFunctions(path, std::move(frfs), std::move(cohs));
 }
 
-FrfSet FrfSetFromFunctions(const std::filesystem::path& path, const std::vector<Function58At>& frfs,
-                           const std::vector<Function58At>& cohs) {
+FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Function58At> frfs,
+                           std::vector<Function58At> cohs) {
   using Item = Function58At;
   if (frfs.empty()) throw InputError(path.string(), "no FRFs (dataset 58 with function type 4) in the file");
 

@@ -19,8 +19,9 @@ struct Function58At {
 /// WriteFrfSet's datasets: one 58 per measured FRF (function type 4), its coherence (type 6).
 std::vector<uff::Dataset> FrfSetDatasets(const FrfSet& frfs);
 /// ReadFrfSet's assembly of FRFs (type 4) and coherences (type 6); `path` names them in messages.
-FrfSet FrfSetFromFunctions(const std::filesystem::path& path, const std::vector<Function58At>& frfs,
-                           const std::vector<Function58At>& cohs);
+/// (Taken by value: the values of each record are released once copied.)
+FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Function58At> frfs,
+                           std::vector<Function58At> cohs);
 
 /// WriteModeSet's datasets: 151 header, 15 geometry (when known), one 55 per mode.
 std::vector<uff::Dataset> ModeSetDatasets(const ModeSet& modes);

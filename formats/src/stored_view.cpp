@@ -6,6 +6,7 @@
 // tests/formats/stored_view_test.cpp pins them to the real write-and-read round trip.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
@@ -53,7 +54,7 @@ FrfSet StoredFrfSet(const FrfSet& frfs, const WriteOptions& options) {
     ToWrittenPrecision(&f, options.binary);
     (f.function_type == 4 ? functions : coherences).push_back({std::move(f), 0});
   }
-  return FrfSetFromFunctions("FRF set", functions, coherences);
+  return FrfSetFromFunctions("FRF set", std::move(functions), std::move(coherences));
 }
 
 ModeSet StoredModeSet(const ModeSet& modes, const std::filesystem::path& path) {
