@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cli.hpp"
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 
@@ -104,15 +105,8 @@ std::vector<correlation::AmplitudeLevel> ReadAmplitudeLevels(const std::vector<s
     const auto eq = a.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == a.size())
       throw UsageError(option + " expects LEVEL=MODES.unv, got '" + a + "'");
-    double level = 0.0;
-    try {
-      std::size_t used = 0;
-      level = std::stod(a.substr(0, eq), &used);
-      if (used != eq) throw std::invalid_argument(a);
-    } catch (const std::exception&) {
-      throw UsageError(option + ": '" + a.substr(0, eq) + "' is not a number");
-    }
-    if (!(level > 0.0) || !std::isfinite(level))
+    const double level = cli::ParseNumber(a.substr(0, eq), option);
+    if (!(level > 0.0))
       throw UsageError(option + ": level must be > 0, got '" + a.substr(0, eq) + "'");
     parsed.push_back({level, a.substr(eq + 1)});
   }

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -117,6 +118,24 @@ void RefuseOutputsOverInputs(const po::variables_map& vm, const std::vector<std:
   for (const std::string& name : output_options)
     for (const std::string& value : values(name)) outputs.push_back({OptionLabel(name, true), value});
   RefuseOutputsOverInputs(inputs, outputs);
+}
+
+double ParseNumber(const std::string& text, const std::string& option) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used == text.size() && std::isfinite(v)) return v;
+  } catch (const std::exception&) {
+  }
+  throw UsageError(option + ": expected a number, got '" + text + "'");
+}
+
+std::pair<double, double> ParseBand(const std::string& text, const std::string& option) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) throw UsageError(option + ": expected LO:HI in Hz, got '" + text + "'");
+  const double lo = ParseNumber(text.substr(0, colon), option), hi = ParseNumber(text.substr(colon + 1), option);
+  if (!(hi > lo) || lo < 0.0) throw UsageError(option + ": expected 0 <= LO < HI, got '" + text + "'");
+  return {lo, hi};
 }
 
 int NotBuiltYet(const std::string& command, const std::string& issue) {

@@ -1,13 +1,15 @@
 // Helpers shared by the subcommands of the `ema` CLI.
 //
-// Exit codes (cli.md): 0 success, 1 bad input (ema::InputError), 2 bad usage (ema::UsageError).
+// Exit codes (cli.md, docs/cli.md): 0 success, 1 bad input (ema::InputError), 2 bad usage
+// (ema::UsageError), 3 a solver did not converge (ema::ConvergenceError).
 // Each subcommand is `int Run<Name>(const std::vector<std::string>& args)`, where args excludes
 // the program and command names; main() catches everything.
 #pragma once
 
 #include <boost/program_options.hpp>
-#include <iosfwd>
+#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ema::cli {
@@ -44,6 +46,21 @@ void RefuseOutputsOverInputs(const std::vector<PathArg>& inputs, const std::vect
 /// (`ema diagnose --test SETUP=MODES.unv`) counts as PATH when NAME=PATH is not itself a file.
 void RefuseOutputsOverInputs(const po::variables_map& vm, const std::vector<std::string>& input_options,
                              const std::vector<std::string>& output_options);
+
+/// An option bound to `*field` whose default is the value the field holds (the options struct is
+/// the single source of defaults; --help shows it as "%g" prints it).
+template <class T>
+po::typed_value<T>* Defaulted(T* field) {
+  std::ostringstream text;
+  text << *field;
+  return po::value(field)->default_value(*field, text.str());
+}
+
+/// A finite number given to `option`; UsageError "OPTION: expected a number, got 'TEXT'".
+double ParseNumber(const std::string& text, const std::string& option);
+
+/// `--band LO:HI` in Hz with 0 <= LO < HI; UsageError naming `option` otherwise.
+std::pair<double, double> ParseBand(const std::string& text, const std::string& option = "--band");
 
 /// True when stderr is a terminal (progress bars are drawn only then).
 bool StderrIsTerminal();

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -17,10 +18,11 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
 #include "report.hpp"
+#include "stages.hpp"
 
 namespace ema {
 
-int RunAmplitude(const std::vector<std::string>& args) {
+std::optional<app::AmplitudeConfig> app::ParseAmplitudeArgs(const std::vector<std::string>& args) {
   namespace po = cli::po;
   const std::string usage =
       "ema amplitude --level F=MODES.unv --level F=MODES.unv [...] [--level-kind peak_force|rms_force|response]\n"
@@ -28,62 +30,73 @@ int RunAmplitude(const std::vector<std::string>& args) {
   po::options_description options(
       "ema amplitude: does a mode depend on the excitation level? (frequency and damping against level, "
       "docs/amplitude.md)");
-  std::vector<std::string> level_args;
-  std::string kind_name = "peak_force", json_path, report_path;
-  correlation::AmplitudeOptions ao;
+  AmplitudeConfig config;
+  std::string kind_name = correlation::LevelKindToString(config.kind);
+  correlation::AmplitudeOptions& ao = config.options;
   cli::AddHelp(&options);
   options.add_options()
-      ("level", po::value(&level_args)->composing(),
+      ("level", po::value(&config.level_args)->composing(),
        "LEVEL=MODES.unv: modes fitted at one excitation level (UFF 55 from `ema fit`; a MODES.json from\n"
        "`ema fit --json` beside it gives each mode's σ). Two or more.")
-      ("level-kind", po::value(&kind_name), "what LEVEL is: peak_force (default, N), rms_force (N) or response")
-      ("json", po::value(&json_path), "result as JSON (cli.md)")
-      ("report", po::value(&report_path), "self-contained HTML page: f and damping against level per mode")
-      ("mac-min", po::value(&ao.mac_min), "MAC a pair needs across levels (default 0.8)")
-      ("frequency-floor-pct", po::value(&ao.frequency_floor_pct),
-       "frequency repeatability, % of f, added to each point's σ (default 0.03)")
-      ("damping-floor", po::value(&ao.damping_floor_relative),
-       "damping repeatability, relative, added to each point's σ (default 0.05)")
-      ("significance", po::value(&ao.significance), "a change counts beyond this many σ (default 3)");
+      ("level-kind", po::value(&kind_name)->default_value(kind_name), "what LEVEL is: peak_force (N), rms_force (N) or response")
+      ("json", po::value(&config.json_path), "result as JSON (cli.md)")
+      ("report", po::value(&config.report_path), "self-contained HTML page: f and damping against level per mode")
+      ("mac-min", cli::Defaulted(&ao.mac_min), "MAC a pair needs across levels")
+      ("frequency-floor-pct", cli::Defaulted(&ao.frequency_floor_pct),
+       "frequency repeatability, % of f, added to each point's σ")
+      ("damping-floor", cli::Defaulted(&ao.damping_floor_relative),
+       "damping repeatability, relative, added to each point's σ")
+      ("significance", cli::Defaulted(&ao.significance), "a change counts beyond this many σ");
   po::positional_options_description positional;
   po::variables_map vm;
-  if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  if (!cli::Parse(args, usage, options, positional, &vm)) return std::nullopt;
   cli::RefuseOutputsOverInputs(vm, {"level"}, {"json", "report"});
-  correlation::LevelKind kind;
-  if (!correlation::StringToLevelKind(kind_name, &kind))
+  if (!correlation::StringToLevelKind(kind_name, &config.kind))
     throw UsageError("--level-kind: expected peak_force, rms_force or response, got '" + kind_name + "'");
   std::string why;
   if (!ao.IsValid(&why)) throw UsageError(why);
-  if (level_args.size() < 2)
+  if (config.level_args.size() < 2)
     throw InputError("ema amplitude", "needs mode sets from at least two levels (--level F=MODES.unv twice or more), got " +
-                                          std::to_string(level_args.size()));
-  std::vector<correlation::AmplitudeLevel> levels = app::ReadAmplitudeLevels(level_args, "--level");
-  const correlation::AmplitudeResult r = correlation::AnalyseAmplitude(std::move(levels), kind, ao);
+                                          std::to_string(config.level_args.size()));
+  return config;
+}
 
-  std::cout << r.modes.size() << " mode(s) followed over " << r.levels.size() << " levels ("
+correlation::AmplitudeResult app::RunAmplitudeStage(const AmplitudeConfig& config,
+                                                    std::vector<correlation::AmplitudeLevel> levels, std::ostream& out) {
+  const correlation::LevelKind kind = config.kind;
+  const correlation::AmplitudeResult r = correlation::AnalyseAmplitude(std::move(levels), kind, config.options);
+
+  out << r.modes.size() << " mode(s) followed over " << r.levels.size() << " levels ("
             << correlation::LevelKindToString(kind) << ")\n";
   for (std::size_t i = 0; i < r.modes.size(); ++i) {
     const correlation::AmplitudeMode& m = r.modes[i];
-    std::cout << "mode " << i + 1 << ": frequency " << correlation::FrequencyTrendToString(m.frequency_trend)
+    out << "mode " << i + 1 << ": frequency " << correlation::FrequencyTrendToString(m.frequency_trend)
               << ", damping " << correlation::DampingTrendToString(m.damping_trend) << " | " << m.reading << "\n";
-    std::cout << "    level        f [Hz]    zeta [%]\n";
+    out << "    level        f [Hz]    zeta [%]\n";
     for (const correlation::AmplitudePoint& p : m.points)
-      std::cout << "    " << std::setw(9) << std::setprecision(4) << p.level << std::fixed << std::setw(13)
+      out << "    " << std::setw(9) << std::setprecision(4) << p.level << std::fixed << std::setw(13)
                 << std::setprecision(4) << p.frequency_hz << std::setw(12) << std::setprecision(4)
                 << 100.0 * p.damping_ratio << std::defaultfloat << "\n";
   }
   if (!r.unpaired.empty())
-    std::cout << r.unpaired.size() << " mode(s) found at one level only (not followed)\n";
-  if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, app::AmplitudeJson(r).dump(2) + "\n");
-  if (!report_path.empty()) {
+    out << r.unpaired.size() << " mode(s) found at one level only (not followed)\n";
+  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, app::AmplitudeJson(r).dump(2) + "\n");
+  if (!config.report_path.empty()) {
     report::ReportInput page;
     page.title = "ema amplitude";
     page.subtitle = std::to_string(r.levels.size()) + " levels (" + correlation::LevelKindToString(kind) + ")";
     std::istringstream lines(r.summary);
     for (std::string line; std::getline(lines, line);) page.summary.push_back(line);
     page.amplitude = app::AmplitudeJson(r);
-    formats::WriteTextFileAtomically(report_path, report::RenderHtml(page));
+    formats::WriteTextFileAtomically(config.report_path, report::RenderHtml(page));
   }
+  return r;
+}
+
+int RunAmplitude(const std::vector<std::string>& args) {
+  const std::optional<app::AmplitudeConfig> config = app::ParseAmplitudeArgs(args);
+  if (!config) return 0;
+  app::RunAmplitudeStage(*config, app::ReadAmplitudeLevels(config->level_args, "--level"), std::cout);
   return 0;
 }
 

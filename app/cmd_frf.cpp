@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -15,49 +16,13 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
+#include "ema/formats/json_codecs.hpp"
+#include "stages.hpp"
 #include "ema/frf/hammer_frf.hpp"
 
 namespace ema {
 
 namespace {
-
-double ParseNumber(const std::string& text, const std::string& option) {
-  try {
-    size_t used = 0;
-    const double v = std::stod(text, &used);
-    if (used == text.size() && std::isfinite(v)) return v;
-  } catch (const std::exception&) {
-  }
-  throw UsageError(option + ": expected a number, got '" + text + "'");
-}
-
-nlohmann::json SummaryJson(const frf::FrfResult& result) {
-  const frf::FrfSummary& s = result.summary;
-  const FrfSet& set = result.frfs;
-  nlohmann::json frfs = nlohmann::json::array();
-  for (const frf::FrfSummaryEntry& e : s.frfs) {
-    nlohmann::json rejected = nlohmann::json::array();
-    for (const frf::RejectedImpact& r : e.rejected)
-      rejected.push_back({{"impact", r.impact}, {"reason", r.reason}, {"file", r.set}});
-    frfs.push_back({{"response_node", e.response.node},
-                    {"response_dir", DirectionName(e.response.direction)},
-                    {"reference_node", e.reference.node},
-                    {"reference_dir", DirectionName(e.reference.direction)},
-                    {"averages", e.averages},
-                    {"rejected", rejected}});
-  }
-  const int lines = set.LineCount();
-  return {{"frfs", frfs},
-          {"estimator", frf::EstimatorName(s.estimator)},
-          {"window_decay_rate", s.window_decay_rate},
-          {"roving_hammer", s.roving_hammer},
-          {"impacts", s.impacts},
-          {"rejected_impacts", s.rejected_impacts},
-          {"lines", lines},
-          {"frequency_min_hz", lines > 0 ? set.frequency_hz[0] : 0.0},
-          {"frequency_max_hz", lines > 0 ? set.frequency_hz[lines - 1] : 0.0},
-          {"notes", s.notes}};
-}
 
 /// One force-level bin of `ema frf --force-bins/--force-bin-edges`.
 struct ForceBin {
@@ -145,8 +110,8 @@ std::vector<ForceBin> MakeForceBins(const std::vector<acquisition::RecordSet>& s
   return bins;
 }
 
-int RunFrfBins(const std::vector<acquisition::RecordSet>& sets, const frf::FrfOptions& opt, const std::string& output,
-               const std::string& json_path, bool binary, int count, const std::vector<double>& edges) {
+void RunFrfBins(const std::vector<acquisition::RecordSet>& sets, const frf::FrfOptions& opt, const std::string& output,
+                const std::string& json_path, bool binary, int count, const std::vector<double>& edges, std::ostream& out) {
   int left_out = 0;
   const std::vector<ForceBin> bins = MakeForceBins(sets, count, edges, &left_out);
   std::vector<frf::FrfResult> results;
@@ -168,13 +133,13 @@ int RunFrfBins(const std::vector<acquisition::RecordSet>& sets, const frf::FrfOp
   formats::WriteOptions write_options;
   write_options.binary = binary;
   nlohmann::json all_frfs = nlohmann::json::array(), bin_json = nlohmann::json::array();
-  std::cout << bins.size() << " force-level bin(s) by peak force";
-  if (left_out > 0) std::cout << " (" << left_out << " impact(s) outside the edges left out)";
-  std::cout << "\n";
+  out << bins.size() << " force-level bin(s) by peak force";
+  if (left_out > 0) out << " (" << left_out << " impact(s) outside the edges left out)";
+  out << "\n";
   for (std::size_t b = 0; b < bins.size(); ++b) {
     const std::string path = BinPath(output, b);
     formats::WriteFrfSet(path, results[b].frfs, write_options);
-    nlohmann::json summary = SummaryJson(results[b]);
+    nlohmann::json summary = formats::FrfSummaryJson(results[b]);
     for (auto& e : summary["frfs"]) {
       e["bin"] = b + 1;
       all_frfs.push_back(e);
@@ -192,7 +157,7 @@ int RunFrfBins(const std::vector<acquisition::RecordSet>& sets, const frf::FrfOp
                         {"upper_edge_n", bins[b].hi},
                         {"impacts", bins[b].peaks.size()},
                         {"summary", summary}});
-    std::cout << "  bin " << b + 1 << ": " << bins[b].peaks.size() << " impact(s), peak force " << bins[b].peaks.front()
+    out << "  bin " << b + 1 << ": " << bins[b].peaks.size() << " impact(s), peak force " << bins[b].peaks.front()
               << " to " << bins[b].peaks.back() << " N (median " << median << " N), "
               << results[b].summary.frfs.size() << " FRF(s) -> " << path << "\n";
   }
@@ -201,12 +166,11 @@ int RunFrfBins(const std::vector<acquisition::RecordSet>& sets, const frf::FrfOp
                                      nlohmann::json{{"frfs", all_frfs}, {"bins", bin_json}, {"left_out_impacts", left_out}}
                                              .dump(2) +
                                          "\n");
-  return 0;
 }
 
 }  // namespace
 
-int RunFrf(const std::vector<std::string>& args) {
+std::optional<app::FrfConfig> app::ParseFrfArgs(const std::vector<std::string>& args) {
   namespace po = cli::po;
   const std::string usage =
       "ema frf TIME.unv [TIME2.unv ...] -o FRF.unv [--estimator H1|H2|Hv] [--json SUMMARY.json]\n"
@@ -214,36 +178,35 @@ int RunFrf(const std::vector<std::string>& args) {
   po::options_description options(
       "ema frf: hammer time records (UFF 58 function type 1, or CSV) to FRFs and coherences (UFF 58).\n"
       "Several files are several roving sets of one test and share the reference");
-  std::vector<std::string> inputs;
-  std::string output, estimator = "H1", json_path, band, exp_window = "auto", quantity;
-  frf::FrfOptions opt;
+  FrfConfig config;
+  std::string estimator = "H1", band, exp_window = "auto", quantity;
+  frf::FrfOptions& opt = config.options;
   acquisition::ImpactOptions& imp = opt.impact;
-  bool accept_double_hits = false, binary = false;
-  int force_bins = 0;
+  bool accept_double_hits = false;
   std::string force_bin_edges;
   options.add_options()
-      ("input", po::value(&inputs)->required()->multitoken(), "time-data files (one per roving set)")
-      ("output,o", po::value(&output)->required(), "FRFs out (UFF 58: function type 4 FRFs, type 6 coherences)")
-      ("estimator", po::value(&estimator), "H1 (default), H2 or Hv")
-      ("json", po::value(&json_path), "summary as JSON (cli.md layout)")
+      ("input", po::value(&config.inputs)->required()->multitoken(), "time-data files (one per roving set)")
+      ("output,o", po::value(&config.output)->required(), "FRFs out (UFF 58: function type 4 FRFs, type 6 coherences)")
+      ("estimator", po::value(&estimator)->default_value(estimator), "H1, H2 or Hv")
+      ("json", po::value(&config.json_path), "summary as JSON (cli.md layout)")
       ("band", po::value(&band), "keep lines in LO:HI Hz (default: 0 to Nyquist)")
-      ("exp-window", po::value(&exp_window),
-       "auto (default: only when a response still rings at the record end), none, or a decay rate 1/tau in 1/s")
-      ("exp-end-level", po::value(&imp.exp_end_level), "auto window: end level as a fraction (default 0.01)")
+      ("exp-window", po::value(&exp_window)->default_value(exp_window),
+       "auto (only when a response still rings at the record end), none, or a decay rate 1/tau in 1/s")
+      ("exp-end-level", cli::Defaulted(&imp.exp_end_level), "auto window: end level as a fraction")
       ("quantity", po::value(&quantity), "output FRF type: accelerance, mobility or receptance (default: as measured)")
-      ("trigger-level", po::value(&imp.trigger_level), "trigger as a fraction of the force peak (default 0.10)")
-      ("force-window", po::value(&imp.force_window_pulses), "force window: pulse end + this many contact times (default 3)")
-      ("double-hit-ratio", po::value(&imp.double_hit_high),
-       "double hit: a second pulse above this fraction of the first (default 0.07)")
-      ("double-hit-autocorrelation", po::value(&imp.double_hit_autocorrelation),
-       "double hit: force autocorrelation secondary peak above this (default 0.05)")
+      ("trigger-level", cli::Defaulted(&imp.trigger_level), "trigger as a fraction of the force peak")
+      ("force-window", cli::Defaulted(&imp.force_window_pulses), "force window: pulse end + this many contact times")
+      ("double-hit-ratio", cli::Defaulted(&imp.double_hit_high),
+       "double hit: a second pulse above this fraction of the first")
+      ("double-hit-autocorrelation", cli::Defaulted(&imp.double_hit_autocorrelation),
+       "double hit: force autocorrelation secondary peak above this")
       ("accept-double-hits", po::bool_switch(&accept_double_hits), "keep double hits (force window spans every pulse)")
-      ("overload-fraction", po::value(&imp.overload_fraction), "overload: peak above this fraction of full scale (default 0.95)")
-      ("level-tolerance", po::value(&imp.level_tolerance),
-       "reject impacts whose peak force is off the point's median by more than this fraction (default 0.5)")
+      ("overload-fraction", cli::Defaulted(&imp.overload_fraction), "overload: peak above this fraction of full scale")
+      ("level-tolerance", cli::Defaulted(&imp.level_tolerance),
+       "reject impacts whose peak force is off the point's median by more than this fraction")
       ("threads", po::value(&opt.threads), "threads for the transforms (default: all cores; results do not depend on it)")
-      ("binary", po::bool_switch(&binary), "write 58b (binary) records")
-      ("force-bins", po::value(&force_bins),
+      ("binary", po::bool_switch(&config.binary), "write 58b (binary) records")
+      ("force-bins", po::value(&config.force_bins),
        "split the impacts into N force-level bins of equal counts by the peak of their force record, one FRF\n"
        "set per bin: FRF.bin1.unv (lowest forces), FRF.bin2.unv, ...; levels listed in the JSON summary")
       ("force-bin-edges", po::value(&force_bin_edges),
@@ -252,7 +215,7 @@ int RunFrf(const std::vector<std::string>& args) {
   po::positional_options_description positional;
   positional.add("input", -1);
   po::variables_map vm;
-  if (!cli::Parse(args, usage, options, positional, &vm)) return 0;
+  if (!cli::Parse(args, usage, options, positional, &vm)) return std::nullopt;
   cli::RefuseOutputsOverInputs(vm, {"input"}, {"output", "json"});
 
   try {
@@ -260,92 +223,91 @@ int RunFrf(const std::vector<std::string>& args) {
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("--estimator: ") + e.what());
   }
-  if (!band.empty()) {
-    const auto colon = band.find(':');
-    if (colon == std::string::npos) throw UsageError("--band: expected LO:HI in Hz, got '" + band + "'");
-    opt.band_lo_hz = ParseNumber(band.substr(0, colon), "--band");
-    opt.band_hi_hz = ParseNumber(band.substr(colon + 1), "--band");
-    if (!(opt.band_hi_hz > opt.band_lo_hz) || opt.band_lo_hz < 0.0)
-      throw UsageError("--band: expected 0 <= LO < HI, got '" + band + "'");
-  }
-  if (exp_window == "auto") {
-    imp.exp_window = acquisition::ExpWindowMode::kAuto;
-  } else if (exp_window == "none") {
-    imp.exp_window = acquisition::ExpWindowMode::kNone;
-  } else {
+  if (!band.empty()) std::tie(opt.band_lo_hz, opt.band_hi_hz) = cli::ParseBand(band);
+  // --exp-window: a mode's name (frf::kExpWindowNames), else a fixed decay rate.
+  if (!FromName(frf::kExpWindowNames, exp_window, &imp.exp_window)) {
     imp.exp_window = acquisition::ExpWindowMode::kFixed;
-    imp.exp_decay_rate = ParseNumber(exp_window, "--exp-window");
-    if (imp.exp_decay_rate < 0.0) throw UsageError("--exp-window: the decay rate must be >= 0");
+    imp.exp_decay_rate = cli::ParseNumber(exp_window, "--exp-window");
   }
-  if (!(imp.exp_end_level > 0.0 && imp.exp_end_level < 1.0)) throw UsageError("--exp-end-level: expected 0 < level < 1");
-  if (!(imp.trigger_level > 0.0 && imp.trigger_level < 1.0)) throw UsageError("--trigger-level: expected 0 < level < 1");
-  if (opt.threads < 0) throw UsageError("--threads: expected 0 (all cores) or a positive count");
-  if (!(imp.double_hit_high > 0.0 && imp.double_hit_high < 1.0))
-    throw UsageError("--double-hit-ratio: expected 0 < ratio < 1");
   imp.double_hit_low = std::min(imp.double_hit_low, 0.5 * imp.double_hit_high);
   imp.reject_double_hits = !accept_double_hits;
-  if (!quantity.empty()) {
-    if (quantity == "accelerance") opt.output_quantity = Quantity::kAcceleration;
-    else if (quantity == "mobility") opt.output_quantity = Quantity::kVelocity;
-    else if (quantity == "receptance") opt.output_quantity = Quantity::kDisplacement;
-    else throw UsageError("--quantity: expected accelerance, mobility or receptance, got '" + quantity + "'");
-  }
+  if (!quantity.empty() && !FromName(frf::kOutputQuantityNames, quantity, &opt.output_quantity))
+    throw UsageError("--quantity: expected " + NameList(frf::kOutputQuantityNames) + ", got '" + quantity + "'");
+  if (std::string why; !opt.IsValid(&why)) throw UsageError(why);
 
-  std::vector<acquisition::RecordSet> sets;
   if (vm.count("force-bins") && !force_bin_edges.empty()) throw UsageError("give --force-bins or --force-bin-edges, not both");
-  if (vm.count("force-bins") && force_bins < 1) throw UsageError("--force-bins: expected a positive number of bins");
-  std::vector<double> edges;
+  if (vm.count("force-bins") && config.force_bins < 1) throw UsageError("--force-bins: expected a positive number of bins");
+  std::vector<double>& edges = config.force_bin_edges;
   if (!force_bin_edges.empty()) {
     std::stringstream ss(force_bin_edges);
     std::string item;
-    while (std::getline(ss, item, ',')) edges.push_back(ParseNumber(item, "--force-bin-edges"));
+    while (std::getline(ss, item, ',')) edges.push_back(cli::ParseNumber(item, "--force-bin-edges"));
     if (edges.size() < 2) throw UsageError("--force-bin-edges: expected at least two edges a,b[,c...] in N");
     for (std::size_t i = 1; i < edges.size(); ++i)
       if (!(edges[i] > edges[i - 1])) throw UsageError("--force-bin-edges: edges must increase");
   }
   // The bin files are outputs too: none may replace an input (cli.md).
-  const std::size_t bin_count = force_bins > 0 ? static_cast<std::size_t>(force_bins) : edges.empty() ? 0 : edges.size() - 1;
+  const std::size_t bin_count = config.force_bins > 0 ? static_cast<std::size_t>(config.force_bins) : edges.empty() ? 0 : edges.size() - 1;
   if (bin_count > 0) {
     std::vector<cli::PathArg> in_args, bin_args;
-    for (const std::string& path : inputs) in_args.push_back({"input", path});
-    for (std::size_t b = 0; b < bin_count; ++b) bin_args.push_back({"-o (bin " + std::to_string(b + 1) + ")", BinPath(output, b)});
+    for (const std::string& path : config.inputs) in_args.push_back({"input", path});
+    for (std::size_t b = 0; b < bin_count; ++b) bin_args.push_back({"-o (bin " + std::to_string(b + 1) + ")", BinPath(config.output, b)});
     cli::RefuseOutputsOverInputs(in_args, bin_args);
   }
-  for (const std::string& path : inputs) {
+  return config;
+}
+
+app::FrfStageResult app::RunFrfStage(const FrfConfig& config, std::ostream& out) {
+  const frf::FrfOptions& opt = config.options;
+  std::vector<acquisition::RecordSet> sets;
+  for (const std::string& path : config.inputs) {
     for (const auto& s : sets)
       if (s.name == path) throw UsageError("file given twice: " + path);
     sets.push_back({path, formats::ReadTimeRecords(path)});
   }
-  if (force_bins > 0 || !edges.empty()) return RunFrfBins(sets, opt, output, json_path, binary, force_bins, edges);
+  FrfStageResult stage;
+  if (config.force_bins > 0 || !config.force_bin_edges.empty()) {
+    RunFrfBins(sets, opt, config.output, config.json_path, config.binary, config.force_bins, config.force_bin_edges, out);
+    return stage;
+  }
   const acquisition::HammerMeasurement test = acquisition::AssembleHammerMeasurement(std::move(sets));
-  const frf::FrfResult result =
+  stage.result =
       frf::EstimateFrfs(test, opt, [](double f, std::string_view stage) { cli::DrawProgress(f, std::string(stage)); });
   cli::DrawProgress(1.0, "");
+  stage.summary_json = formats::FrfSummaryJson(stage.result);
 
   // Nothing is written unless everything above succeeded; each file goes through a temp + rename.
   formats::WriteOptions write_options;
-  write_options.binary = binary;
-  formats::WriteFrfSet(output, result.frfs, write_options);
-  if (!json_path.empty()) formats::WriteTextFileAtomically(json_path, SummaryJson(result).dump(2) + "\n");
+  write_options.binary = config.binary;
+  formats::WriteFrfSet(config.output, stage.result.frfs, write_options);
+  stage.stored = formats::StoredFrfSet(stage.result.frfs, write_options);
+  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, stage.summary_json.dump(2) + "\n");
 
-  const frf::FrfSummary& s = result.summary;
-  const FrfSet& set = result.frfs;
-  std::cout << s.frfs.size() << " FRF(s) (" << frf::EstimatorName(s.estimator) << ") from " << s.impacts
-            << " impact(s) in " << inputs.size() << " file(s)";
-  if (s.roving_hammer) std::cout << ", roving hammer (fixed sensors; the fit uses reciprocity)";
-  std::cout << "\n  " << set.LineCount() << " lines, " << set.frequency_hz[0] << " to "
-            << set.frequency_hz[set.LineCount() - 1] << " Hz; exponential window: ";
-  if (s.window_decay_rate > 0.0) std::cout << "1/tau = " << s.window_decay_rate << " 1/s (recorded for the fit)\n";
-  else std::cout << "none\n";
-  for (const std::string& n : s.notes) std::cout << "  note: " << n << "\n";
-  std::cout << "  response   reference  averages  rejected\n";
+  const frf::FrfSummary& s = stage.result.summary;
+  const FrfSet& set = stage.result.frfs;
+  out << s.frfs.size() << " FRF(s) (" << frf::EstimatorName(s.estimator) << ") from " << s.impacts
+      << " impact(s) in " << config.inputs.size() << " file(s)";
+  if (s.roving_hammer) out << ", roving hammer (fixed sensors; the fit uses reciprocity)";
+  out << "\n  " << set.LineCount() << " lines, " << set.frequency_hz[0] << " to "
+      << set.frequency_hz[set.LineCount() - 1] << " Hz; exponential window: ";
+  if (s.window_decay_rate > 0.0) out << "1/tau = " << s.window_decay_rate << " 1/s (recorded for the fit)\n";
+  else out << "none\n";
+  for (const std::string& n : s.notes) out << "  note: " << n << "\n";
+  out << "  response   reference  averages  rejected\n";
   for (const frf::FrfSummaryEntry& e : s.frfs) {
-    std::cout << "  " << std::left << std::setw(11) << DofName(e.response) << std::setw(11) << DofName(e.reference)
-              << std::right << std::setw(8) << e.averages << "  " << e.rejected.size() << "\n" << std::left;
+    out << "  " << std::left << std::setw(11) << DofName(e.response) << std::setw(11) << DofName(e.reference)
+        << std::right << std::setw(8) << e.averages << "  " << e.rejected.size() << "\n" << std::left;
     for (const frf::RejectedImpact& r : e.rejected)
-      std::cout << "      impact " << r.impact << " (" << r.set << "): " << r.reason << "\n";
+      out << "      impact " << r.impact << " (" << r.set << "): " << r.reason << "\n";
   }
-  std::cout << std::right;
+  out << std::right;
+  return stage;
+}
+
+int RunFrf(const std::vector<std::string>& args) {
+  const std::optional<app::FrfConfig> config = app::ParseFrfArgs(args);
+  if (!config) return 0;
+  app::RunFrfStage(*config, std::cout);
   return 0;
 }
 

@@ -1,5 +1,6 @@
 // ema info FILE [--json OUT]: what a UFF or CSV time-data file holds (cli.md).
 #include <iostream>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "cli.hpp"
@@ -7,6 +8,7 @@
 #include "ema/core/types.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/info.hpp"
+#include "stages.hpp"
 
 namespace ema {
 
@@ -68,20 +70,32 @@ nlohmann::json ToJson(const formats::FileSummary& s) {
 
 }  // namespace
 
-int RunInfo(const std::vector<std::string>& args) {
+std::optional<app::InfoConfig> app::ParseInfoArgs(const std::vector<std::string>& args) {
   namespace po = cli::po;
   po::options_description options("ema info options");
+  InfoConfig config;
   cli::AddHelp(&options);
-  options.add_options()("file", po::value<std::string>()->required(), "UFF (.unv/.uff, 58b too) or CSV time-data file")(
-      "json", po::value<std::string>(), "also write the summary as JSON to this file");
+  options.add_options()("file", po::value(&config.file)->required(), "UFF (.unv/.uff, 58b too) or CSV time-data file")(
+      "json", po::value(&config.json_path), "also write the summary as JSON to this file");
   po::positional_options_description positional;
   positional.add("file", 1);
   po::variables_map vm;
-  if (!cli::Parse(args, "ema info FILE [--json OUT]", options, positional, &vm)) return 0;
+  if (!cli::Parse(args, "ema info FILE [--json OUT]", options, positional, &vm)) return std::nullopt;
   cli::RefuseOutputsOverInputs(vm, {"file"}, {"json"});
-  const formats::FileSummary summary = formats::SummarizeFile(vm["file"].as<std::string>());
-  std::cout << formats::SummaryText(summary);
-  if (vm.count("json")) formats::WriteTextFileAtomically(vm["json"].as<std::string>(), ToJson(summary).dump(2) + "\n");
+  return config;
+}
+
+formats::FileSummary app::RunInfoStage(const InfoConfig& config, std::ostream& out) {
+  const formats::FileSummary summary = formats::SummarizeFile(config.file);
+  out << formats::SummaryText(summary);
+  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, ToJson(summary).dump(2) + "\n");
+  return summary;
+}
+
+int RunInfo(const std::vector<std::string>& args) {
+  const std::optional<app::InfoConfig> config = app::ParseInfoArgs(args);
+  if (!config) return 0;
+  app::RunInfoStage(*config, std::cout);
   return 0;
 }
 

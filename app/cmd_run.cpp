@@ -2,28 +2,35 @@
 // correlate (after) — with every intermediate file kept in OUTDIR, a one-screen summary and the
 // self-contained HTML report (OUTDIR/report.html).
 //
-// Each step calls the matching subcommand's entry point in this process (RunFrf, RunFit, ...) with
-// the arguments a user would type, so every file a step writes is exactly what that subcommand
-// writes, and its stdout goes to OUTDIR/logs/<step>.txt. A failed step is reported, the steps that
-// depend on it are skipped, the report is still written with what exists, and the exit code is 1.
+// Each step is the typed stage of the subcommand of the same name (stages.hpp): the project file
+// gives each stage its config, each stage takes the previous stages' typed results and writes its
+// own files (exactly what that subcommand writes), and what it prints goes to
+// OUTDIR/logs/<step>.txt under the equivalent command line. Nothing written here is read back. A
+// failed step is reported, the steps that depend on it are skipped, the report is still written
+// with what exists, and the exit code is 1.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
+#include <functional>
 #include <iostream>
+#include <map>
+#include <optional>
 #include <sstream>
 
 #include "cli.hpp"
 #include "ema/core/error.hpp"
+#include "ema/core/text.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
-#include "project_file.hpp"
+#include "ema/formats/model_file.hpp"
+#include "ema/formats/project_file.hpp"
 #include "quality_json.hpp"
-#include "run_history.hpp"
 #include "report.hpp"
+#include "run_history.hpp"
+#include "stages.hpp"
 
 namespace ema {
 
@@ -37,26 +44,19 @@ class StepRunner {
  public:
   StepRunner(fs::path out, int total_steps) : out_(std::move(out)), total_(total_steps) {}
 
-  /// Runs `command` (a subcommand entry point) with `args`; true when it returned 0.
-  bool Run(const std::string& label, const std::string& log_name,
-           int (*command)(const std::vector<std::string>&), const std::vector<std::string>& args) {
+  /// Runs `stage` (a typed stage printing to the stream it is given) and keeps its printout in
+  /// OUTDIR/logs/<log_name>.txt under `command_line`; true when it succeeded.
+  bool Run(const std::string& label, const std::string& log_name, const std::string& command_line,
+           const std::function<void(std::ostream&)>& stage) {
     cli::DrawProgress(static_cast<double>(done_) / total_, label);
-    std::ostringstream captured;
-    int code = 1;
+    std::ostringstream printed;
     std::string failure;
-    {
-      std::streambuf* previous = std::cout.rdbuf(captured.rdbuf());
-      try {
-        code = command(args);
-        if (code != 0) failure = "exit code " + std::to_string(code);
-      } catch (const std::exception& e) {
-        failure = e.what();
-      }
-      std::cout.rdbuf(previous);
+    try {
+      stage(printed);
+    } catch (const std::exception& e) {
+      failure = e.what();
     }
-    std::string log = "$ ema";
-    for (const std::string& a : args) log += " " + a;
-    log += "\n" + captured.str();
+    std::string log = "$ ema " + command_line + "\n" + printed.str();
     if (!failure.empty()) log += "\nFAILED: " + failure + "\n";
     const fs::path log_path = out_ / "logs" / (log_name + ".txt");
     try {
@@ -91,22 +91,8 @@ class StepRunner {
   std::vector<std::string> problems_;
 };
 
-json LoadJson(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return json();
-  try {
-    return json::parse(in);
-  } catch (const std::exception&) {
-    return json();
-  }
-}
-
-std::string Fixed(double value, int digits) {
-  if (!std::isfinite(value)) return "-";
-  char text[64];
-  std::snprintf(text, sizeof text, "%.*f", digits, value);
-  return text;
-}
+// The summary's numbers: "-" where a value does not exist.
+std::string Fixed(double value, int digits) { return FixedPoint(value, digits, "-"); }
 
 double Get(const json& j, std::initializer_list<const char*> keys) {
   const json* node = &j;
@@ -172,13 +158,13 @@ struct TestFiles {
 };
 
 // Every file `ema run` writes (docs/project-file.md), for cli.md's "outputs never replace inputs".
-std::vector<cli::PathArg> RunOutputs(const fs::path& out, const app::Project& project) {
+std::vector<cli::PathArg> RunOutputs(const fs::path& out, const formats::Project& project) {
   std::vector<cli::PathArg> o = {{"-o", out.string()}};
   auto add = [&](const fs::path& p) { o.push_back({"-o", p.string()}); };
   for (const char* name : {"diagnosis.json", "updated-model.toml", "report.html", "summary.txt", "history.json"})
     add(out / name);
   add(out / "logs" / "diagnose.txt");
-  for (const app::ProjectTest& test : project.tests) {
+  for (const formats::ProjectTest& test : project.tests) {
     const TestFiles f(out / test.name);
     for (const fs::path& p : {f.modes, f.modes_json, f.stabilisation, f.model_before, f.model_before_json, f.corr_before,
                               f.corr_before_table, f.model_after, f.model_after_json, f.corr_after, f.corr_after_table})
@@ -197,6 +183,36 @@ std::string Stamp() {
   return text;
 }
 
+// Test points of the model's [[point]] entries given by position (points given by FE node have
+// none), for the report's geometry.
+std::vector<Node> ModelPoints(const model::Model& model) {
+  std::vector<Node> nodes;
+  for (const model::TestPoint& p : model.points)
+    if (!p.where.IsNode() && p.where.has_at) nodes.push_back(Node{p.id, p.where.at});
+  return nodes;
+}
+
+std::string Joined(const std::vector<std::string>& words) {
+  std::string text;
+  for (const std::string& w : words) text += (text.empty() ? "" : " ") + w;
+  return text;
+}
+
+std::string Joined(const std::vector<fs::path>& paths) {
+  std::vector<std::string> words;
+  for (const fs::path& p : paths) words.push_back(p.string());
+  return Joined(words);
+}
+
+// What one test's stages produced (empty where a stage failed or was skipped).
+struct TestResults {
+  std::optional<FrfSet> frfs;
+  nlohmann::json frf_summary;
+  std::optional<app::FitStageResult> fit;
+  std::optional<app::ModelStageResult> model_before, model_after;
+  std::optional<app::CorrelateStageResult> correlation_before, correlation_after;
+};
+
 }  // namespace
 
 int RunRun(const std::vector<std::string>& args) {
@@ -212,104 +228,201 @@ int RunRun(const std::vector<std::string>& args) {
   po::variables_map vm;
   if (!cli::Parse(args, "ema run PROJECT.toml [-o OUTDIR]", options, positional, &vm)) return 0;
 
-  const app::Project project = app::ReadProjectFile(vm["project"].as<std::string>());
+  const formats::Project project = formats::ReadProjectFile(vm["project"].as<std::string>());
   const fs::path out = vm["output"].as<std::string>();
   cli::RefuseOutputsOverInputs({{"", project.file.string()}}, RunOutputs(out, project));
   std::error_code ec;
   fs::create_directories(out / "logs", ec);
   if (ec) throw InputError(out.string(), "cannot create the output folder: " + ec.message());
-  for (const app::ProjectTest& test : project.tests) fs::create_directories(out / test.name);
+  for (const formats::ProjectTest& test : project.tests) fs::create_directories(out / test.name);
 
   const fs::path diagnosis_json = out / "diagnosis.json", updated_model = out / "updated-model.toml";
   const int steps_per_test = 6;  // frf, fit, model, correlate, model (after), correlate (after)
   StepRunner runner(out, steps_per_test * static_cast<int>(project.tests.size()) + 2);
-  const std::string model = project.model.string();
-  std::vector<std::string> fit_ok;  // tests whose modes exist
+  const std::string model_path = project.model.string();
+  // The nominal model, read once; a model that cannot be read fails every step that needs it.
+  std::optional<model::Model> nominal;
+  std::string nominal_error;
+  try {
+    nominal = formats::ReadModelFile(project.model);
+  } catch (const std::exception& e) {
+    nominal_error = e.what();
+  }
+  auto nominal_model = [&]() -> const model::Model& {
+    if (!nominal) throw InputError(nominal_error);
+    return *nominal;
+  };
+  std::vector<TestResults> results(project.tests.size());
   std::vector<std::string> files;
 
   // frf → fit → model → correlate (before), per test.
-  for (const app::ProjectTest& test : project.tests) {
+  for (std::size_t t = 0; t < project.tests.size(); ++t) {
+    const formats::ProjectTest& test = project.tests[t];
+    TestResults& r = results[t];
     const TestFiles f(out / test.name);
     const std::string tag = test.name + ": ";
     bool have_frf = true;
-    fs::path frf_path = f.frf;
+    const fs::path frf_path = test.frf ? *test.frf : f.frf;
     if (test.frf) {
-      frf_path = *test.frf;
       runner.Advance();  // the project gives FRFs: nothing to estimate
     } else {
-      std::vector<std::string> a;
-      for (const fs::path& t : test.time) a.push_back(t.string());
-      a.insert(a.end(), {"-o", f.frf.string(), "--estimator", project.estimator, "--json", f.frf_json.string()});
-      have_frf = runner.Run(tag + "frf", test.name + "-frf", RunFrf, a);
+      const std::string command = Joined(test.time) + " -o " + f.frf.string() + " --estimator " + project.estimator +
+                                  " --json " + f.frf_json.string() + (project.binary ? " --binary" : "");
+      have_frf = runner.Run(tag + "frf", test.name + "-frf", command, [&](std::ostream& log) {
+        app::FrfConfig config;
+        for (const fs::path& p : test.time) config.inputs.push_back(p.string());
+        config.output = f.frf.string();
+        config.json_path = f.frf_json.string();
+        try {
+          config.options.estimator = frf::ParseEstimator(project.estimator);
+        } catch (const std::invalid_argument& e) {
+          throw UsageError(std::string("--estimator: ") + e.what());
+        }
+        config.binary = project.binary;
+        app::FrfStageResult stage = app::RunFrfStage(config, log);
+        r.frfs = std::move(stage.stored);
+        r.frf_summary = std::move(stage.summary_json);
+      });
     }
-    bool have_modes = false;
     if (have_frf) {
-      std::vector<std::string> a = {frf_path.string(), "-o", f.modes.string(), "--json", f.modes_json.string(),
-                                    "--stabilisation", f.stabilisation.string(), "--select", project.select};
-      if (project.band_hz) a.insert(a.end(), {"--band", Fixed(project.band_hz->first, 3) + ":" + Fixed(project.band_hz->second, 3)});
-      if (project.order_max) a.insert(a.end(), {"--order-max", std::to_string(*project.order_max)});
-      a.insert(a.end(), project.fit_extra.begin(), project.fit_extra.end());
-      have_modes = runner.Run(tag + "fit", test.name + "-fit", RunFit, a);
+      std::string command = frf_path.string() + " -o " + f.modes.string() + " --json " + f.modes_json.string() +
+                            " --stabilisation " + f.stabilisation.string() + " --select " + project.select;
+      if (project.band_hz) command += " --band " + Fixed(project.band_hz->first, 3) + ":" + Fixed(project.band_hz->second, 3);
+      if (project.order_max) command += " --order-max " + std::to_string(*project.order_max);
+      if (!project.fit_extra.empty()) command += " " + Joined(project.fit_extra);
+      runner.Run(tag + "fit", test.name + "-fit", command, [&](std::ostream& log) {
+        // [fit] args are `ema fit` options; band, order_max and select are the project's own keys.
+        std::optional<app::FitConfig> config = app::ParseFitArgs(project.fit_extra, false);
+        if (!config) throw UsageError("[fit] args: --help is not an option of a project");
+        config->input = frf_path.string();
+        config->output = f.modes.string();
+        config->json_path = f.modes_json.string();
+        config->stabilisation_path = f.stabilisation.string();
+        config->options.select_frequencies_hz = app::ParseSelect(project.select);
+        if (project.band_hz) std::tie(config->options.data.band_lo_hz, config->options.data.band_hi_hz) = *project.band_hz;
+        if (project.order_max) config->options.polymax.order_max = *project.order_max;
+        if (!r.frfs) r.frfs = formats::ReadFrfSet(frf_path);  // FRFs the project gives
+        r.fit = app::RunFitStage(*config, *r.frfs, log);
+      });
     } else {
       runner.Skip(tag + "fit", "no FRFs");
     }
-    std::vector<std::string> setup;
-    if (!test.setup.empty()) setup = {"--setup", test.setup};
-    std::vector<std::string> a = {model, "-o", f.model_before.string(), "--json", f.model_before_json.string()};
-    a.insert(a.end(), setup.begin(), setup.end());
-    runner.Run(tag + "model (nominal)", test.name + "-model-before", RunModel, a);
-    if (have_modes) {
-      fit_ok.push_back(test.name);
-      a = {f.modes.string(), model, "--json", f.corr_before.string(), "--table", f.corr_before_table.string()};
-      a.insert(a.end(), setup.begin(), setup.end());
-      runner.Run(tag + "correlate (nominal)", test.name + "-correlate-before", RunCorrelate, a);
+    const std::string setup_args = test.setup.empty() ? "" : " --setup " + test.setup;
+    runner.Run(tag + "model (nominal)", test.name + "-model-before",
+               model_path + " -o " + f.model_before.string() + " --json " + f.model_before_json.string() + setup_args,
+               [&](std::ostream& log) {
+                 app::ModelConfig config;
+                 config.model_path = model_path;
+                 config.output = f.model_before.string();
+                 config.json_path = f.model_before_json.string();
+                 config.options.setup = test.setup;
+                 r.model_before = app::RunModelStage(config, nominal_model(), log);
+               });
+    if (r.fit) {
+      runner.Run(tag + "correlate (nominal)", test.name + "-correlate-before",
+                 f.modes.string() + " " + model_path + " --json " + f.corr_before.string() + " --table " +
+                     f.corr_before_table.string() + setup_args,
+                 [&](std::ostream& log) {
+                   if (!r.model_before) throw InputError(model_path, "the nominal model's modes are missing");
+                   app::CorrelateConfig config;
+                   config.test_path = f.modes.string();
+                   config.model_path = model_path;
+                   config.setup = test.setup;
+                   config.json_path = f.corr_before.string();
+                   config.table_path = f.corr_before_table.string();
+                   ModeSet model_modes = r.model_before->solution.modes;
+                   if (model_modes.source.empty()) model_modes.source = model_path;
+                   r.correlation_before = app::RunCorrelateStage(config, r.fit->stored_modes, model_modes, log);
+                 });
     } else {
       runner.Skip(tag + "correlate (nominal)", "no test modes");
     }
   }
 
   // diagnose, all tests at once.
-  bool have_update = false;
-  if (!fit_ok.empty()) {
-    std::vector<std::string> a = {model};
-    for (const app::ProjectTest& test : project.tests) {
-      if (std::find(fit_ok.begin(), fit_ok.end(), test.name) == fit_ok.end()) continue;
-      const TestFiles f(out / test.name);
-      a.push_back("--test");
-      a.push_back((test.setup.empty() ? std::string() : test.setup + "=") + f.modes.string());
-    }
-    a.insert(a.end(), {"--json", diagnosis_json.string(), "-o", updated_model.string()});
-    a.insert(a.end(), project.diagnose_extra.begin(), project.diagnose_extra.end());
-    have_update = runner.Run("diagnose", "diagnose", RunDiagnose, a) && fs::exists(updated_model);
+  std::optional<app::DiagnoseStageResult> diagnosis;
+  bool any_modes = false;
+  for (const TestResults& r : results) any_modes = any_modes || r.fit.has_value();
+  if (any_modes) {
+    std::string command = model_path;
+    for (std::size_t t = 0; t < project.tests.size(); ++t)
+      if (results[t].fit)
+        command += " --test " + (project.tests[t].setup.empty() ? std::string() : project.tests[t].setup + "=") +
+                   TestFiles(out / project.tests[t].name).modes.string();
+    command += " --json " + diagnosis_json.string() + " -o " + updated_model.string();
+    if (!project.diagnose_extra.empty()) command += " " + Joined(project.diagnose_extra);
+    runner.Run("diagnose", "diagnose", command, [&](std::ostream& log) {
+      // [diagnose] args are `ema diagnose` options.
+      std::optional<app::DiagnoseConfig> config = app::ParseDiagnoseArgs(project.diagnose_extra, false);
+      if (!config) throw UsageError("[diagnose] args: --help is not an option of a project");
+      config->model_path = model_path;
+      config->json_path = diagnosis_json.string();
+      config->output = updated_model.string();
+      std::vector<diagnose::SetupModes> tests;
+      for (std::size_t t = 0; t < project.tests.size(); ++t) {
+        if (!results[t].fit) continue;
+        // The modes as the modes file holds them, with each mode's σ as `ema diagnose` finds it
+        // in the `ema fit --json` file beside it (app::AttachSidecarUncertainty).
+        ModeSet modes = results[t].fit->stored_modes;
+        const ModeSet& fitted = results[t].fit->fit.modes;
+        for (std::size_t m = 0; m < modes.modes.size() && m < fitted.modes.size(); ++m) {
+          modes.modes[m].frequency_std_hz = fitted.modes[m].frequency_std_hz;
+          modes.modes[m].damping_ratio_std = fitted.modes[m].damping_ratio_std;
+        }
+        tests.push_back({project.tests[t].setup, std::move(modes)});
+      }
+      diagnosis = app::RunDiagnoseStage(*config, nominal_model(), tests, log);
+    });
   } else {
     runner.Skip("diagnose", "no test modes");
   }
 
   // model → correlate (after), per test.
-  for (const app::ProjectTest& test : project.tests) {
+  for (std::size_t t = 0; t < project.tests.size(); ++t) {
+    const formats::ProjectTest& test = project.tests[t];
+    TestResults& r = results[t];
     const TestFiles f(out / test.name);
     const std::string tag = test.name + ": ";
-    if (!have_update) {
+    if (!diagnosis) {
       runner.Skip(tag + "model (updated)", "no updated model");
       runner.Skip(tag + "correlate (updated)", "no updated model");
       continue;
     }
-    std::vector<std::string> setup;
-    if (!test.setup.empty()) setup = {"--setup", test.setup};
-    std::vector<std::string> a = {updated_model.string(), "-o", f.model_after.string(), "--json", f.model_after_json.string()};
-    a.insert(a.end(), setup.begin(), setup.end());
-    runner.Run(tag + "model (updated)", test.name + "-model-after", RunModel, a);
-    if (std::find(fit_ok.begin(), fit_ok.end(), test.name) == fit_ok.end()) {
+    const std::string setup_args = test.setup.empty() ? "" : " --setup " + test.setup;
+    runner.Run(tag + "model (updated)", test.name + "-model-after",
+               updated_model.string() + " -o " + f.model_after.string() + " --json " + f.model_after_json.string() +
+                   setup_args,
+               [&](std::ostream& log) {
+                 app::ModelConfig config;
+                 config.model_path = updated_model.string();
+                 config.output = f.model_after.string();
+                 config.json_path = f.model_after_json.string();
+                 config.options.setup = test.setup;
+                 r.model_after = app::RunModelStage(config, diagnosis->updated, log);
+               });
+    if (!r.fit) {
       runner.Skip(tag + "correlate (updated)", "no test modes");
       continue;
     }
-    a = {f.modes.string(), updated_model.string(), "--json", f.corr_after.string(), "--table", f.corr_after_table.string()};
-    a.insert(a.end(), setup.begin(), setup.end());
-    runner.Run(tag + "correlate (updated)", test.name + "-correlate-after", RunCorrelate, a);
+    runner.Run(tag + "correlate (updated)", test.name + "-correlate-after",
+               f.modes.string() + " " + updated_model.string() + " --json " + f.corr_after.string() + " --table " +
+                   f.corr_after_table.string() + setup_args,
+               [&](std::ostream& log) {
+                 if (!r.model_after) throw InputError(updated_model.string(), "the updated model's modes are missing");
+                 app::CorrelateConfig config;
+                 config.test_path = f.modes.string();
+                 config.model_path = updated_model.string();
+                 config.setup = test.setup;
+                 config.json_path = f.corr_after.string();
+                 config.table_path = f.corr_after_table.string();
+                 ModeSet model_modes = r.model_after->solution.modes;
+                 if (model_modes.source.empty()) model_modes.source = updated_model.string();
+                 r.correlation_after = app::RunCorrelateStage(config, r.fit->stored_modes, model_modes, log);
+               });
   }
 
   // Summary.
-  const json diagnosis = LoadJson(diagnosis_json);
+  const json diagnosis_data = diagnosis ? diagnosis->json : json();
   std::vector<std::string> summary;
   summary.push_back("ema run: " + project.name + "  (" + project.file.filename().string() + ", model " +
                     project.model.filename().string() + ")");
@@ -320,31 +433,39 @@ int RunRun(const std::vector<std::string>& args) {
   report::ReportInput input;
   double agree_before = 0.0, mac_before = 0.0, agree_after = 0.0, mac_after = 0.0;
   int n_before = 0, n_after = 0;
-  for (const app::ProjectTest& test : project.tests) {
-    const TestFiles f(out / test.name);
+  const std::vector<Node> geometry = nominal ? ModelPoints(*nominal) : std::vector<Node>();
+  for (std::size_t t = 0; t < project.tests.size(); ++t) {
+    const formats::ProjectTest& test = project.tests[t];
+    TestResults& r = results[t];
     report::SetupResults s;
     s.name = test.name;
-    s.frf_summary = LoadJson(f.frf_json);
-    s.stabilisation = LoadJson(f.stabilisation);
-    s.test_modes = LoadJson(f.modes_json);
-    s.model_modes_before = LoadJson(f.model_before_json);
-    s.model_modes_after = LoadJson(f.model_after_json);
-    s.correlation_before = LoadJson(f.corr_before);
-    s.correlation_after = LoadJson(f.corr_after);
-    s.geometry = app::ReadModelPoints(project.model);
+    s.frf_summary = r.frf_summary;
+    if (r.fit) {
+      s.stabilisation = r.fit->stabilisation_json;
+      s.fit = r.fit->fit;
+      s.refine = r.fit->refine;
+      if (r.correlation_before && r.model_before)
+        s.correlation_before = report::CorrelationView{r.correlation_before->result, r.fit->stored_modes, r.model_before->solution.modes};
+      if (r.correlation_after && r.model_after)
+        s.correlation_after = report::CorrelationView{r.correlation_after->result, r.fit->stored_modes, r.model_after->solution.modes};
+    }
+    s.geometry = geometry;
     s.lines = project.lines;
     if (project.band_hz) {
       s.band_lo_hz = project.band_hz->first;
       s.band_hi_hz = project.band_hz->second;
     }
-    const fs::path frf_path = test.frf ? *test.frf : f.frf;
-    if (fs::exists(frf_path)) {
+    const fs::path frf_path = test.frf ? *test.frf : TestFiles(out / test.name).frf;
+    if (!r.frfs && test.frf) {
       try {
-        s.frfs = formats::ReadFrfSet(frf_path);
+        r.frfs = formats::ReadFrfSet(frf_path);  // FRFs the project gives
       } catch (const std::exception& e) {
         runner.Problem("report: cannot read " + frf_path.string() + ": " + e.what());
       }
-      if (s.frfs) s.quality = ReportQuality(*s.frfs, s.band_lo_hz, s.band_hi_hz, frf_path.string(), &runner);
+    }
+    if (r.frfs) {
+      s.frfs = r.frfs;
+      s.quality = ReportQuality(*s.frfs, s.band_lo_hz, s.band_hi_hz, frf_path.string(), &runner);
     }
     int frf_count = 0, rejected = 0;
     if (s.frf_summary.contains("frfs") && s.frf_summary["frfs"].is_array()) {
@@ -354,30 +475,34 @@ int RunRun(const std::vector<std::string>& args) {
     } else if (s.frfs) {
       frf_count = s.frfs->OutputCount() * s.frfs->ReferenceCount();
     }
-    const int modes = s.test_modes.contains("modes") ? static_cast<int>(s.test_modes["modes"].size()) : 0;
-    const std::string before = Fixed(Get(s.correlation_before, {"summary", "mean_agreement_pct"}), 1) + " % / " +
-                               Fixed(Get(s.correlation_before, {"summary", "mean_mac"}), 3);
-    const std::string after = Fixed(Get(s.correlation_after, {"summary", "mean_agreement_pct"}), 1) + " % / " +
-                              Fixed(Get(s.correlation_after, {"summary", "mean_mac"}), 3);
+    const int modes = r.fit ? static_cast<int>(r.fit->fit.modes.modes.size()) : 0;
+    // Mean agreement and MAC of a correlation; NaN when it does not exist.
+    auto means = [](const std::optional<app::CorrelateStageResult>& c) {
+      return c ? std::make_pair(c->result.mean_agreement_pct, c->result.mean_mac) : std::make_pair(kNaN, kNaN);
+    };
+    const auto [agreement_nominal, mac_nominal] = means(r.correlation_before);
+    const auto [agreement_updated, mac_updated] = means(r.correlation_after);
+    const std::string before = Fixed(agreement_nominal, 1) + " % / " + Fixed(mac_nominal, 3);
+    const std::string after = Fixed(agreement_updated, 1) + " % / " + Fixed(mac_updated, 3);
     std::snprintf(line, sizeof line, "  %-12s %5d %8d %6d  %-22s %-22s", test.name.c_str(), frf_count, rejected, modes,
                   before.c_str(), after.c_str());
     summary.push_back(line);
-    if (const double a = Get(s.correlation_before, {"summary", "mean_agreement_pct"}); std::isfinite(a)) {
-      agree_before += a;
-      mac_before += Get(s.correlation_before, {"summary", "mean_mac"});
+    if (std::isfinite(agreement_nominal)) {
+      agree_before += agreement_nominal;
+      mac_before += mac_nominal;
       ++n_before;
     }
-    if (const double a = Get(s.correlation_after, {"summary", "mean_agreement_pct"}); std::isfinite(a)) {
-      agree_after += a;
-      mac_after += Get(s.correlation_after, {"summary", "mean_mac"});
+    if (std::isfinite(agreement_updated)) {
+      agree_after += agreement_updated;
+      mac_after += mac_updated;
       ++n_after;
     }
     input.setups.push_back(std::move(s));
   }
-  if (diagnosis.contains("candidates") && diagnosis["candidates"].is_array() && !diagnosis["candidates"].empty()) {
-    const double base = Get(diagnosis, {"baseline", "mean_abs_frequency_error_pct"});
+  if (diagnosis_data.contains("candidates") && diagnosis_data["candidates"].is_array() && !diagnosis_data["candidates"].empty()) {
+    const double base = Get(diagnosis_data, {"baseline", "mean_abs_frequency_error_pct"});
     int shown = 0;
-    for (const json& c : diagnosis["candidates"]) {
+    for (const json& c : diagnosis_data["candidates"]) {
       if (shown == 3) break;
       const int rank = c.value("rank", shown + 1);
       std::string text = "  " + std::string(rank == 1 ? "diagnosis: " : "           ") + "#" + std::to_string(rank) + " " +
@@ -399,9 +524,9 @@ int RunRun(const std::vector<std::string>& args) {
   record.mac_before = n_before ? mac_before / n_before : std::nan("");
   record.agreement_after = n_after ? agree_after / n_after : std::nan("");
   record.mac_after = n_after ? mac_after / n_after : std::nan("");
-  record.diagnosis = diagnosis;
+  record.diagnosis = diagnosis_data;
   input.history = app::AppendRunHistory(out, record);
-  input.diagnosed_places = app::DiagnosedPlaces(project.model, diagnosis);
+  input.diagnosed_places = nominal ? app::DiagnosedPlaces(*nominal, diagnosis_data) : json::array();
   if (input.history.size() > 1) {
     const json& prev = input.history[input.history.size() - 2];
     if (prev.contains("mean_agreement_pct_before") && prev["mean_agreement_pct_before"].is_number())
@@ -418,7 +543,7 @@ int RunRun(const std::vector<std::string>& args) {
     input.title = project.title;
     input.subtitle = project.file.filename().string() + " · model " + project.model.filename().string() + " · " + Stamp();
     input.summary = summary;
-    input.diagnosis = diagnosis;
+    input.diagnosis = diagnosis_data;
     input.problems = runner.problems();
     for (const auto& entry : fs::recursive_directory_iterator(out)) {
       if (!entry.is_regular_file()) continue;

@@ -61,6 +61,9 @@ int main(int argc, char** argv) {
     } catch (const ema::InputError& e) {
       std::cerr << "ema " << name << ": error: " << e.what() << "\n";
       return 1;
+    } catch (const ema::ConvergenceError& e) {
+      std::cerr << "ema " << name << ": error: did not converge: " << e.what() << "\n";
+      return 3;
     } catch (const std::bad_alloc&) {
       std::cerr << "ema " << name << ": error: out of memory\n";
       return 1;

@@ -96,17 +96,19 @@ json AppendRunHistory(const fs::path& out_dir, const RunRecord& r) {
 }
 
 json DiagnosedPlaces(const fs::path& model_file, const json& diagnosis) {
+  try {
+    return DiagnosedPlaces(formats::ReadModelFile(model_file), diagnosis);
+  } catch (const std::exception&) {
+    return json::array();
+  }
+}
+
+json DiagnosedPlaces(const model::Model& m, const json& diagnosis) {
   json out = json::array();
   if (!diagnosis.contains("candidates") || !diagnosis["candidates"].is_array() || diagnosis["candidates"].empty())
     return out;
   const json& first = diagnosis["candidates"][0];
   if (!first.contains("effects") || !first["effects"].is_array()) return out;
-  model::Model m;
-  try {
-    m = formats::ReadModelFile(model_file);
-  } catch (const std::exception&) {
-    return out;
-  }
   for (const json& e : first["effects"]) {
     const std::string kind = e.value("kind", std::string()), target = e.value("target", std::string());
     const model::EffectKindInfo* info = model::FindEffectKind(kind);

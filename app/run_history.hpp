@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "ema/model/model.hpp"
+
 namespace ema::app {
 
 /// One run's entry of the history.
@@ -35,5 +37,7 @@ nlohmann::json AppendRunHistory(const std::filesystem::path& out_dir, const RunR
 /// (spring targets: both ends of every spring of the group or member; points: the test points;
 /// bodies: the centre). Empty when the model cannot be read or rank 1 is "none".
 nlohmann::json DiagnosedPlaces(const std::filesystem::path& model_file, const nlohmann::json& diagnosis);
+/// The same on a model already read.
+nlohmann::json DiagnosedPlaces(const model::Model& model, const nlohmann::json& diagnosis);
 
 }  // namespace ema::app

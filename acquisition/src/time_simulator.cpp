@@ -8,6 +8,7 @@
 #include <string>
 
 #include "antialias.hpp"
+#include "ema/core/error.hpp"
 
 namespace ema::acquisition {
 
@@ -134,7 +135,7 @@ ImpactSignals TimeIntegrator::Simulate(const Dof& ref, const std::vector<Dof>& r
         }
       }
       if (!converged)
-        throw std::runtime_error("time integration: the non-linear element forces do not converge within a step of " +
+        throw ConvergenceError("time integration: the non-linear element forces do not converge within a step of " +
                                  std::to_string(dt) + " s; raise the oversampling");
       r = rho(c_it);
       c = c_it;

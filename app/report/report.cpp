@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <map>
 
+#include "ema/core/text.hpp"
+#include "ema/formats/json_codecs.hpp"
 #include "embedded_assets.hpp"
 #include "report_quality.hpp"
 
@@ -16,12 +18,7 @@ namespace {
 using json = nlohmann::json;
 
 // Five significant digits: plenty for a plot, and keeps the page small.
-double Round(double value) {
-  if (!std::isfinite(value)) return value;
-  char text[32];
-  std::snprintf(text, sizeof text, "%.5g", value);
-  return std::strtod(text, nullptr);
-}
+double Round(double value) { return RoundToDigits(value, 5); }
 
 json Rounded(const Eigen::VectorXd& values) {
   json out = json::array();
@@ -60,17 +57,17 @@ json FrfData(const SetupResults& setup) {
   Eigen::VectorXd f(static_cast<int>(lines.size()));
   for (int i = 0; i < f.size(); ++i) f[i] = frfs.frequency_hz[lines[i]];
   out["frequency_hz"] = Rounded(f);
-  // The fit's own modal model (MODES.json "modal_model": refined poles, residues, residual terms).
-  const json model = setup.test_modes.is_object() && setup.test_modes.contains("modal_model")
-                         ? setup.test_modes["modal_model"]
-                         : json();
+  // The fit's own modal model (refined poles, residues, residual terms); no fit: no fit curve.
+  const Eigen::VectorXcd no_fit = Eigen::VectorXcd::Constant(frfs.LineCount(), {kNaN, kNaN});
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(f.size());
   json list = json::array();
   for (int r = 0; r < frfs.ReferenceCount(); ++r) {
     for (int o = 0; o < frfs.OutputCount(); ++o) {
       const Eigen::VectorXcd h = frfs.h[r].col(o);
       if (!h.allFinite() && !(h.array() == h.array()).any()) continue;  // not measured
-      const Eigen::VectorXcd fit = SynthesiseFromModalModel(model, frfs.outputs[o], frfs.references[r], frfs.frequency_hz);
+      const Eigen::VectorXcd fit =
+          setup.fit ? curvefit::SynthesiseMeasuredFrf(setup.fit->model, frfs.outputs[o], frfs.references[r], frfs.frequency_hz)
+                    : no_fit;
       Eigen::VectorXd mag(f.size()), phase(f.size()), fit_mag(f.size()), fit_phase(f.size());
       for (int i = 0; i < f.size(); ++i) {
         const std::complex<double> v = h[lines[i]], w = fit[lines[i]];
@@ -99,36 +96,34 @@ json FrfData(const SetupResults& setup) {
   return out;
 }
 
-// The MAC matrix of the correlation step (CORR.json "mac", test modes as rows), not recomputed here.
-json MacData(const ShapeTable& test, const json& model_json, const json& correlation) {
-  const ShapeTable model = ReadShapeTable(model_json);
-  if (!correlation.is_object() || !correlation.contains("mac") || !correlation["mac"].is_array()) return json::object();
+// The MAC matrix of the correlation step (test modes as rows), not recomputed here.
+json MacData(const std::optional<CorrelationView>& correlation) {
+  if (!correlation) return json::object();
+  const Eigen::MatrixXd& mac = correlation->result.mac;
   json values = json::array();
-  for (const json& row_in : correlation["mac"]) {
+  for (Eigen::Index i = 0; i < mac.rows(); ++i) {
     json row = json::array();
-    if (row_in.is_array())
-      for (const json& v : row_in) row.push_back(v.is_number() ? json(Round(v.get<double>())) : json(nullptr));
+    for (Eigen::Index j = 0; j < mac.cols(); ++j) row.push_back(std::isfinite(mac(i, j)) ? json(Round(mac(i, j))) : json(nullptr));
     values.push_back(std::move(row));
   }
-  int shared = 0;
-  if (correlation.contains("summary") && correlation["summary"].is_object() &&
-      correlation["summary"].contains("shared_dofs") && correlation["summary"]["shared_dofs"].is_number_integer())
-    shared = correlation["summary"]["shared_dofs"].get<int>();
-  auto labels = [](const ShapeTable& t, const char* prefix) {
+  auto labels = [](const ModeSet& set, const char* prefix) {
     json out = json::array();
-    for (size_t m = 0; m < t.frequency_hz.size(); ++m) {
+    for (size_t m = 0; m < set.modes.size(); ++m) {
       char text[64];
-      std::snprintf(text, sizeof text, "%s%zu %.1f Hz", prefix, m + 1, t.frequency_hz[m]);
+      std::snprintf(text, sizeof text, "%s%zu %.1f Hz", prefix, m + 1, set.modes[m].frequency_hz);
       out.push_back(text);
     }
     return out;
   };
-  return {{"test", labels(test, "T")}, {"model", labels(model, "M")}, {"values", values}, {"shared_dofs", shared}};
+  return {{"test", labels(correlation->test, "T")},
+          {"model", labels(correlation->model, "M")},
+          {"values", values},
+          {"shared_dofs", correlation->result.shared_dof_count}};
 }
 
-json ModeData(const ShapeTable& test, const SetupResults& setup) {
+json ModeData(const ModeSet& test, const SetupResults& setup) {
   json out = json::object();
-  if (test.shapes.cols() == 0 || setup.geometry.empty()) return out;
+  if (test.modes.empty() || setup.geometry.empty()) return out;
   json nodes = json::array();
   std::map<int, int> index;
   for (const Node& node : setup.geometry) {
@@ -139,16 +134,20 @@ json ModeData(const ShapeTable& test, const SetupResults& setup) {
                      {"z", Round(node.position.z())}});
   }
   json modes = json::array();
-  for (int m = 0; m < test.shapes.cols(); ++m) {
-    // Per node: [re x, re y, re z, im x, im y, im z], normalised to the largest translation.
+  for (const Mode& mode : test.modes) {
+    // Per node: [re x, re y, re z, im x, im y, im z], normalised to the largest translation; a
+    // value measured along -X is drawn as the opposite value along +X.
     std::vector<std::array<std::complex<double>, 3>> u(setup.geometry.size());
     double largest = 0.0;
-    for (size_t d = 0; d < test.dofs.size(); ++d) {
+    for (size_t d = 0; d < test.dofs.size() && static_cast<Eigen::Index>(d) < mode.shape.size(); ++d) {
       const Dof& dof = test.dofs[d];
       auto it = index.find(dof.node);
-      if (it == index.end() || dof.direction < 1 || dof.direction > 3) continue;
-      u[it->second][dof.direction - 1] = test.shapes(static_cast<int>(d), m);
-      largest = std::max(largest, std::abs(test.shapes(static_cast<int>(d), m)));
+      const int axis = std::abs(dof.direction);
+      if (it == index.end() || axis < 1 || axis > 3) continue;
+      const std::complex<double> value = dof.direction < 0 ? -mode.shape[static_cast<Eigen::Index>(d)]
+                                                           : mode.shape[static_cast<Eigen::Index>(d)];
+      u[it->second][axis - 1] = value;
+      largest = std::max(largest, std::abs(value));
     }
     json shape = json::array();
     for (const auto& v : u) {
@@ -157,8 +156,8 @@ json ModeData(const ShapeTable& test, const SetupResults& setup) {
       for (int k = 0; k < 3; ++k) row.push_back(largest > 0 ? Round(v[k].imag() / largest) : 0.0);
       shape.push_back(std::move(row));
     }
-    modes.push_back({{"frequency_hz", Round(test.frequency_hz[m])},
-                     {"damping_ratio", Round(test.damping_ratio[m])},
+    modes.push_back({{"frequency_hz", Round(mode.frequency_hz)},
+                     {"damping_ratio", Round(mode.damping_ratio)},
                      {"shape", std::move(shape)}});
   }
   json lines = json::array();
@@ -210,20 +209,6 @@ std::string ScriptSafe(std::string text) {
   return text;
 }
 
-std::string HtmlEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 json BuildReportData(const ReportInput& input) {
@@ -237,22 +222,28 @@ json BuildReportData(const ReportInput& input) {
   data["history"] = input.history.is_null() ? json::array() : input.history;
   json setups = json::array();
   for (const SetupResults& setup : input.setups) {
-    const ShapeTable test = ReadShapeTable(setup.test_modes);
+    // The fit's modes as `ema fit --json` writes them (the mode table, the quality section).
+    const json test_modes = setup.fit ? formats::FitModesJson(*setup.fit, setup.refine) : json();
+    const ModeSet no_modes;
+    const ModeSet& test = setup.fit ? setup.fit->modes : no_modes;
     json s = {{"name", setup.name}};
     s["band_hz"] = {setup.band_lo_hz, setup.band_hi_hz};
     s["stabilisation"] = StabilisationData(setup);
     s["mode_indicators"] = ModeIndicatorData(setup.stabilisation);
-    s["quality"] = QualityData(setup.quality, setup.test_modes);
+    s["quality"] = QualityData(setup.quality, test_modes);
     json selected = json::array();
-    for (double f : test.frequency_hz) selected.push_back(Round(f));
+    for (const Mode& m : test.modes) selected.push_back(Round(m.frequency_hz));
     s["selected_hz"] = selected;
     s["frf"] = FrfData(setup);
-    s["mac_before"] = MacData(test, setup.model_modes_before, setup.correlation_before);
-    s["mac_after"] = MacData(test, setup.model_modes_after, setup.correlation_after);
-    s["correlation_before"] = setup.correlation_before.is_null() ? json::object() : setup.correlation_before;
-    s["correlation_after"] = setup.correlation_after.is_null() ? json::object() : setup.correlation_after;
+    s["mac_before"] = MacData(setup.correlation_before);
+    s["mac_after"] = MacData(setup.correlation_after);
+    auto correlation_json = [](const std::optional<CorrelationView>& c) {
+      return c ? formats::CorrelationJson(c->result, c->test, c->model) : json::object();
+    };
+    s["correlation_before"] = correlation_json(setup.correlation_before);
+    s["correlation_after"] = correlation_json(setup.correlation_after);
     s["shapes"] = ModeData(test, setup);
-    s["test_mode_table"] = TestModeTable(setup.test_modes);
+    s["test_mode_table"] = TestModeTable(test_modes);
     json rejected = json::array();
     if (setup.frf_summary.is_object() && setup.frf_summary.contains("frfs") && setup.frf_summary["frfs"].is_array()) {
       for (const json& frf : setup.frf_summary["frfs"]) {

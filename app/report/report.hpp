@@ -1,8 +1,10 @@
 // The self-contained HTML report of `ema run`: one file with every chart (plotly.js embedded), the
 // data it draws embedded as JSON, and no network access when opened.
 //
-// The inputs are the files the pipeline steps write (the JSON of `ema frf/fit/model/correlate/
-// diagnose`) plus the measured FRFs, so the report shows exactly what the steps produced.
+// The inputs are the typed results of the pipeline's stages (the measured FRFs, the fit with its
+// own modal model, the model modes, the correlations, the diagnosis as `ema diagnose --json`), so
+// the report shows exactly what the stages produced and computes nothing of its own: the MAC is
+// the correlation's, the fit curve is the fit's modal model (curvefit::SynthesiseMeasuredFrf).
 #pragma once
 
 #include <Eigen/Core>
@@ -14,8 +16,17 @@
 #include <vector>
 
 #include "ema/core/types.hpp"
+#include "ema/correlation/correlate.hpp"
+#include "ema/curvefit/fit.hpp"
 
 namespace ema::report {
+
+/// A correlation with the mode sets it correlated (the MAC chart's rows and columns).
+struct CorrelationView {
+  correlation::CorrelationResult result;
+  ModeSet test;                        ///< the test modes as correlated
+  ModeSet model;                       ///< the model's modes
+};
 
 /// Everything the report shows about one test (one setup of the model).
 struct SetupResults {
@@ -24,11 +35,12 @@ struct SetupResults {
   nlohmann::json frf_summary;          ///< `ema frf --json` (averages, rejected impacts)
   nlohmann::json stabilisation;        ///< `ema fit --stabilisation`
   nlohmann::json quality;              ///< `ema quality --json` layout (data-quality section)
-  nlohmann::json test_modes;           ///< `ema fit --json` ({"modes": [...]})
-  nlohmann::json model_modes_before;   ///< `ema model --json` of the nominal model
-  nlohmann::json model_modes_after;    ///< `ema model --json` of the updated model
-  nlohmann::json correlation_before;   ///< `ema correlate --json`, nominal model
-  nlohmann::json correlation_after;    ///< `ema correlate --json`, updated model
+  /// The fit: its modes (animated shapes, mode table), the poles it dropped, its refinement and
+  /// its own modal model (the fit curve over the measured FRFs). Empty: no fit.
+  std::optional<curvefit::FitResult> fit;
+  curvefit::RefineMethod refine = curvefit::RefineMethod::kMl;  ///< how the fit refined (mode table)
+  std::optional<CorrelationView> correlation_before;  ///< with the nominal model
+  std::optional<CorrelationView> correlation_after;   ///< with the updated model
   std::vector<Node> geometry;          ///< test points (m), for the animated shapes
   std::vector<std::pair<int, int>> lines;  ///< wireframe edges between test points (node ids)
   double band_lo_hz = 0.0;             ///< fit band; 0/0 = the whole FRF range
@@ -59,26 +71,6 @@ std::string RenderHtml(const ReportInput& input);
 nlohmann::json BuildReportData(const ReportInput& input);
 
 // ---- pieces of the data preparation, exposed for tests ----
-
-/// A mode shape as read from a modes JSON (cli.md layout), keyed by DOF with positive direction
-/// codes (a "-Z" value is stored negated under "+Z").
-struct ShapeTable {
-  std::vector<Dof> dofs;
-  std::vector<double> frequency_hz;
-  std::vector<double> damping_ratio;
-  Eigen::MatrixXcd shapes;             ///< dofs × modes
-};
-
-/// Reads {"modes": [{"frequency_hz", "damping_ratio", "shape": [{"node", "dir", "value"}]}]}.
-/// Unknown or missing pieces give an empty table (the report then says the chart is unavailable).
-ShapeTable ReadShapeTable(const nlohmann::json& modes_json);
-
-/// The FRF from `reference` to `response` of the fit's own modal model (MODES.json
-/// "modal_model" of `ema fit`: poles as fitted, receptance residues, real lower/upper residual
-/// terms, FRF type; curvefit.md), on the lines inside the model's band. NaN elsewhere, and
-/// everywhere when the model lacks that FRF (nothing is re-fitted here).
-Eigen::VectorXcd SynthesiseFromModalModel(const nlohmann::json& modal_model, const Dof& response, const Dof& reference,
-                                          const Eigen::VectorXd& frequency_hz);
 
 /// Normalised stabilisation diagram: one entry per pole (order, frequency, damping, stable flag).
 struct StabilisationPoints {

@@ -1,9 +1,7 @@
-// Data preparation of the HTML report: shape tables, the fit's modal model as FRFs, stabilisation points.
+// Data preparation of the HTML report: the stabilisation points of `ema fit --stabilisation`.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <limits>
-#include <map>
 
 #include "report.hpp"
 
@@ -20,13 +18,6 @@ double Number(const json& j, const char* key, double fallback = kNaN) {
   return it->get<double>();
 }
 
-// "+Z", "Z", "-z" or a UFF code (3, -3).
-int DirectionOf(const json& j) {
-  if (j.is_number_integer()) return j.get<int>();
-  if (j.is_string()) return ParseDirection(j.get<std::string>());
-  return 0;
-}
-
 std::complex<double> ComplexOf(const json& j) {
   if (j.is_array() && j.size() == 2 && j[0].is_number() && j[1].is_number())
     return {j[0].get<double>(), j[1].get<double>()};
@@ -35,83 +26,6 @@ std::complex<double> ComplexOf(const json& j) {
 }
 
 }  // namespace
-
-ShapeTable ReadShapeTable(const json& modes_json) {
-  ShapeTable table;
-  if (!modes_json.is_object() || !modes_json.contains("modes") || !modes_json["modes"].is_array()) return table;
-  const json& modes = modes_json["modes"];
-  std::map<Dof, int> row;
-  for (const json& mode : modes) {
-    if (!mode.contains("shape") || !mode["shape"].is_array()) continue;
-    for (const json& entry : mode["shape"]) {
-      const int dir = DirectionOf(entry.value("dir", json()));
-      if (!entry.contains("node") || !entry["node"].is_number_integer() || dir == 0) continue;
-      const Dof dof{entry["node"].get<int>(), std::abs(dir)};
-      if (!row.count(dof)) row.emplace(dof, 0);
-    }
-  }
-  int next = 0;
-  for (auto& [dof, index] : row) {
-    index = next++;
-    table.dofs.push_back(dof);
-  }
-  table.shapes = Eigen::MatrixXcd::Zero(static_cast<int>(table.dofs.size()), static_cast<int>(modes.size()));
-  int column = 0;
-  for (const json& mode : modes) {
-    table.frequency_hz.push_back(Number(mode, "frequency_hz"));
-    table.damping_ratio.push_back(Number(mode, "damping_ratio"));
-    if (mode.contains("shape") && mode["shape"].is_array()) {
-      for (const json& entry : mode["shape"]) {
-        const int dir = DirectionOf(entry.value("dir", json()));
-        if (!entry.contains("node") || !entry["node"].is_number_integer() || dir == 0) continue;
-        const std::complex<double> value = ComplexOf(entry.value("value", json()));
-        table.shapes(row.at(Dof{entry["node"].get<int>(), std::abs(dir)}), column) = dir < 0 ? -value : value;
-      }
-    }
-    ++column;
-  }
-  return table;
-}
-
-Eigen::VectorXcd SynthesiseFromModalModel(const json& model, const Dof& response, const Dof& reference,
-                                          const Eigen::VectorXd& frequency_hz) {
-  const Eigen::Index n = frequency_hz.size();
-  Eigen::VectorXcd out = Eigen::VectorXcd::Constant(n, {kNaN, kNaN});
-  if (!model.is_object() || !model.contains("poles") || !model.contains("frfs") || !model["frfs"].is_array()) return out;
-  const json* entry = nullptr;
-  for (const json& frf : model["frfs"]) {
-    if (!frf.is_object()) continue;
-    const Dof res{frf.value("response_node", 0), DirectionOf(frf.value("response_dir", json()))};
-    const Dof ref{frf.value("reference_node", 0), DirectionOf(frf.value("reference_dir", json()))};
-    if (res == response && ref == reference) {
-      entry = &frf;
-      break;
-    }
-  }
-  if (!entry || !entry->contains("residues") || !(*entry)["residues"].is_array()) return out;
-  std::vector<std::complex<double>> poles, residues;
-  for (const json& p : model["poles"]) poles.push_back(ComplexOf(p));
-  for (const json& r : (*entry)["residues"]) residues.push_back(ComplexOf(r));
-  if (poles.size() != residues.size()) return out;
-  const std::string type = model.value("frf_type", std::string("accelerance"));
-  const int k_pow = type == "receptance" ? 0 : type == "mobility" ? 1 : 2;
-  const double lower = Number(*entry, "lower_residual", 0.0), upper = Number(*entry, "upper_residual", 0.0);
-  double lo = 0.0, hi = std::numeric_limits<double>::infinity();
-  if (model.contains("band_hz") && model["band_hz"].is_array() && model["band_hz"].size() == 2) {
-    lo = model["band_hz"][0].get<double>();
-    hi = model["band_hz"][1].get<double>();
-  }
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double f = frequency_hz[i];
-    if (!(f > 0.0) || f < lo || f > hi) continue;
-    const std::complex<double> jw(0.0, kTwoPi * f);
-    std::complex<double> v = lower / (jw * jw) + upper;
-    for (size_t r = 0; r < poles.size(); ++r)
-      v += residues[r] / (jw - poles[r]) + std::conj(residues[r]) / (jw - std::conj(poles[r]));
-    out[i] = v * std::pow(jw, k_pow);
-  }
-  return out;
-}
 
 StabilisationPoints ReadStabilisation(const json& stabilisation) {
   StabilisationPoints points;

@@ -16,9 +16,7 @@ json Round4(const json& v) {
   if (!v.is_number()) return nullptr;
   const double x = v.get<double>();
   if (!std::isfinite(x)) return nullptr;
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", x);
-  return std::strtod(text, nullptr);
+  return RoundToDigits(x, 4);
 }
 
 bool IsArray(const json& j, const char* key) { return j.is_object() && j.contains(key) && j[key].is_array(); }
@@ -97,6 +95,13 @@ json ModeIndicatorData(const json& stabilisation) {
     out["mmif"] = std::move(col);
   }
   return out;
+}
+
+double RoundToDigits(double value, int significant) {
+  if (!std::isfinite(value)) return value;
+  char text[40];
+  std::snprintf(text, sizeof text, "%.*g", significant, value);
+  return std::strtod(text, nullptr);
 }
 
 }  // namespace ema::report

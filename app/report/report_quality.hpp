@@ -19,4 +19,8 @@ nlohmann::json ModeIndicatorData(const nlohmann::json& stabilisation);
 
 inline constexpr int kMaxMapColumns = 400;
 
+/// `value` to `significant` digits ("%.*g"): the page carries no more than a plot can show.
+/// Not finite: unchanged.
+double RoundToDigits(double value, int significant);
+
 }  // namespace ema::report

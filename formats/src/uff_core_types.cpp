@@ -17,6 +17,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/uff.hpp"
+#include "io_internal.hpp"
 
 namespace ema::formats {
 
@@ -243,11 +244,7 @@ FrfSet ReadFrfSet(const std::filesystem::path& path) {
   }
   uff::Reader reader(path);
   Dataset d;
-  struct Item {
-    Function58 f;
-    std::int64_t line;
-  };
-  std::vector<Item> frfs, cohs;
+  std::vector<Function58At> frfs, cohs;
   while (reader.Next(&d)) {
     if (d.number != 58) continue;
     auto& f = std::get<Function58>(d.body);
@@ -255,6 +252,12 @@ FrfSet ReadFrfSet(const std::filesystem::path& path) {
     if (f.function_type == 4) frfs.push_back({std::move(f), d.line});
     else if (f.function_type == 6) cohs.push_back({std::move(f), d.line});
   }
+  return FrfSetFromFunctions(path, std::move(frfs), std::move(cohs));
+}
+
+FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Function58At> frfs,
+                           std::vector<Function58At> cohs) {
+  using Item = Function58At;
   if (frfs.empty()) throw InputError(path.string(), "no FRFs (dataset 58 with function type 4) in the file");
 
   FrfSet set;
@@ -388,6 +391,10 @@ bool FiniteRange(const Eigen::VectorXcd& col, const std::string& what, Eigen::In
 }  // namespace
 
 void WriteFrfSet(const std::filesystem::path& path, const FrfSet& frfs, const WriteOptions& options) {
+  uff::WriteFile(path, FrfSetDatasets(frfs), {options.binary});
+}
+
+std::vector<Dataset> FrfSetDatasets(const FrfSet& frfs) {
   if (frfs.LineCount() < 2) throw InputError("UFF writer", "an FRF set needs at least 2 frequency lines");
   if (static_cast<int>(frfs.h.size()) != frfs.ReferenceCount())
     throw InputError("UFF writer", "FrfSet: one H matrix per reference expected");
@@ -460,7 +467,7 @@ void WriteFrfSet(const std::filesystem::path& path, const FrfSet& frfs, const Wr
     }
   }
   if (out.empty()) throw InputError("UFF writer", "the FRF set holds no finite FRF to write");
-  uff::WriteFile(path, out, {options.binary});
+  return out;
 }
 
 // ------------------------------------------------------------------------------------------
@@ -484,7 +491,12 @@ Eigen::Matrix3d LocalAxes18(const uff::CoordinateSystem18& cs) {
 
 ModeSet ReadModeSet(const std::filesystem::path& path) {
   uff::Reader reader(path);
-  Dataset d;
+  std::vector<Dataset> datasets;
+  for (Dataset d; reader.Next(&d);) datasets.push_back(std::move(d));
+  return ModeSetFromDatasets(path, datasets);
+}
+
+ModeSet ModeSetFromDatasets(const std::filesystem::path& path, const std::vector<Dataset>& datasets) {
   struct Shape {
     Mode mode;
     std::map<Dof, std::complex<double>> values;
@@ -495,7 +507,7 @@ ModeSet ReadModeSet(const std::filesystem::path& path) {
   std::map<int, uff::CoordinateSystem18> systems;
   std::vector<int> node_order;
   double length_factor = 1.0;
-  while (reader.Next(&d)) {
+  for (const Dataset& d : datasets) {
     const std::string where = path.string() + ":" + std::to_string(d.line);
     if (const auto* u = std::get_if<uff::Units164>(&d.body)) length_factor = u->length;
     if (const auto* n15 = std::get_if<uff::Nodes15>(&d.body)) {
@@ -632,6 +644,10 @@ ModeSet ReadModeSet(const std::filesystem::path& path) {
 }
 
 void WriteModeSet(const std::filesystem::path& path, const ModeSet& modes, const WriteOptions& options) {
+  uff::WriteFile(path, ModeSetDatasets(modes), {options.binary});
+}
+
+std::vector<Dataset> ModeSetDatasets(const ModeSet& modes) {
   std::vector<Dataset> out;
   uff::Header151 h;
   h.model_name = modes.source.empty() ? "ema" : modes.source;
@@ -701,7 +717,7 @@ void WriteModeSet(const std::filesystem::path& path, const ModeSet& modes, const
     }
     out.push_back(Dataset{55, 0, 0, {}, std::move(a)});
   }
-  uff::WriteFile(path, out, {options.binary});
+  return out;
 }
 
 }  // namespace ema::formats

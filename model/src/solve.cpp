@@ -359,7 +359,7 @@ Solution Solve(const Model& input, const SolveOptions& options) {
     solver.init();
     solver.compute(Spectra::SortRule::LargestMagn, 1000, 1e-10, Spectra::SortRule::SmallestAlge);
     if (solver.info() != Spectra::CompInfo::Successful)
-      throw InputError(origin, "sparse eigenvalue solution did not converge");
+      throw ConvergenceError(origin, "sparse eigenvalue solution did not converge");
     eigenvalues = solver.eigenvalues();
     vectors = solver.eigenvectors();
   }

@@ -39,8 +39,14 @@ ReportInput MakeQualityInput() {
                                  {{"frequency_hz", 100.0}, {"damping_ratio", 0.02}, {"status", "stable"}}}}});
   setup.stabilisation = {{"orders", orders}};
   AddModeIndicatorsJson(&setup.stabilisation, frfs, {}, "frf.unv");
-  setup.test_modes = {{"modes", {{{"frequency_hz", 40.0}, {"damping_ratio", 0.01}, {"mpc", 0.999}, {"mpd_deg", 1.2},
-                                  {"mcf", 0.001}, {"shape", json::array()}}}}};
+  Mode mode;
+  mode.frequency_hz = 40.0;
+  mode.damping_ratio = 0.01;
+  mode.mpc = 0.999;
+  mode.mpd = 1.2;
+  mode.mcf = 0.001;
+  setup.fit = curvefit::FitResult();
+  setup.fit->modes.modes = {mode};
   setup.frfs = frfs;
   ReportInput input;
   input.title = "Quality report";

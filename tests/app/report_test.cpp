@@ -1,5 +1,6 @@
-// The HTML report of `ema run` on synthetic results with known truth: the data preparation (MAC,
-// FRF synthesis, stabilisation reading) against hand values, and the page in headless Chromium.
+// The HTML report of `ema run` on synthetic results with known truth: the data preparation (the
+// correlation's MAC as given, the fit's modal model as the fit curve, stabilisation reading)
+// against hand values, and the page in headless Chromium.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -38,38 +39,38 @@ struct Truth {
     }
     return h;
   }
-  /// `ema fit`'s "modal_model" for the FRFs from node 1 +Z (dofs[2]) to every DOF.
-  json ModalModelJson(double lo_hz, double hi_hz) const {
-    json poles = json::array(), frfs = json::array();
+  /// The fit's modal model for the FRFs from node 1 +Z (dofs[2]) to every DOF: receptance
+  /// residues phi_o phi_ref / (2j w_d), accelerance, band [lo_hz, hi_hz].
+  curvefit::ModalModel ModalModel(double lo_hz, double hi_hz) const {
+    curvefit::ModalModel model;
+    model.outputs = dofs;
+    model.references = {dofs[2]};
+    model.frf_type = FrfType::kAccelerance;
+    model.band_lo_hz = lo_hz;
+    model.band_hi_hz = hi_hz;
+    model.residues.resize(12, 3);
     for (int m = 0; m < 3; ++m) {
       const std::complex<double> p = FrequencyAndDampingToPole(f_hz[m], zeta[m]);
-      poles.push_back({p.real(), p.imag()});
+      model.poles_fitted.push_back(p);
+      for (int o = 0; o < 12; ++o) model.residues(o, m) = shapes(o, m) * shapes(2, m) / std::complex<double>(0.0, 2.0 * p.imag());
     }
-    for (int o = 0; o < 12; ++o) {
-      json residues = json::array();
-      for (int m = 0; m < 3; ++m) {
-        const std::complex<double> p = FrequencyAndDampingToPole(f_hz[m], zeta[m]);
-        const std::complex<double> r = shapes(o, m) * shapes(2, m) / std::complex<double>(0.0, 2.0 * p.imag());
-        residues.push_back({r.real(), r.imag()});
-      }
-      frfs.push_back({{"response_node", dofs[o].node}, {"response_dir", DirectionName(dofs[o].direction)},
-                      {"reference_node", dofs[2].node}, {"reference_dir", DirectionName(dofs[2].direction)},
-                      {"residues", residues}, {"lower_residual", 0.0}, {"upper_residual", 0.0}});
-    }
-    return {{"frf_type", "accelerance"}, {"band_hz", {lo_hz, hi_hz}}, {"poles", poles}, {"frfs", frfs}};
+    model.lower_residual = model.upper_residual = Eigen::VectorXd::Zero(12);
+    return model;
   }
-  json ModesJson(double frequency_factor, double shape_noise, unsigned seed) const {
+  ModeSet Modes(double frequency_factor, double shape_noise, unsigned seed) const {
     std::mt19937 rng(seed);
     std::normal_distribution<double> noise(0.0, shape_noise);
-    json modes = json::array();
+    ModeSet set;
+    set.dofs = dofs;
     for (int m = 0; m < 3; ++m) {
-      json shape = json::array();
-      for (int i = 0; i < 12; ++i)
-        shape.push_back({{"node", dofs[i].node}, {"dir", DirectionName(dofs[i].direction)},
-                         {"value", {shapes(i, m) * (1 + noise(rng)), 0.0}}});
-      modes.push_back({{"frequency_hz", f_hz[m] * frequency_factor}, {"damping_ratio", zeta[m]}, {"shape", shape}});
+      Mode mode;
+      mode.frequency_hz = f_hz[m] * frequency_factor;
+      mode.damping_ratio = zeta[m];
+      mode.shape.resize(12);
+      for (int i = 0; i < 12; ++i) mode.shape[i] = shapes(i, m) * (1 + noise(rng));
+      set.modes.push_back(mode);
     }
-    return {{"modes", modes}};
+    return set;
   }
 };
 
@@ -90,20 +91,30 @@ FrfSet MakeFrfs(const Truth& truth, double noise_level, unsigned seed) {
   return frfs;
 }
 
-json Correlation(const Truth& truth, double factor) {
-  json pairs = json::array();
+// The correlation step's result, with its own MAC matrix (test rows), which the report shows as given.
+CorrelationView Correlation(const Truth& truth, const ModeSet& test, double factor) {
+  CorrelationView view;
+  view.test = test;
+  view.model = truth.Modes(factor, 0.05, 2);
+  correlation::CorrelationResult& r = view.result;
   double sum = 0.0;
   for (int m = 0; m < 3; ++m) {
-    const double ft = truth.f_hz[m], fm = truth.f_hz[m] * factor;
-    const double agreement = 100.0 * (1.0 - std::abs(fm - ft) / fm);
-    sum += agreement;
-    pairs.push_back({{"test_mode", m + 1}, {"model_mode", m + 1}, {"test_frequency_hz", ft},
-                     {"model_frequency_hz", fm}, {"agreement_pct", agreement}, {"mac", 0.99}});
+    correlation::CorrelationRow row;
+    row.test_mode = row.model_mode = m;
+    row.test_frequency_hz = truth.f_hz[m];
+    row.model_frequency_hz = truth.f_hz[m] * factor;
+    row.agreement_pct = 100.0 * (1.0 - std::abs(row.model_frequency_hz - row.test_frequency_hz) / row.model_frequency_hz);
+    row.mac = 0.99;
+    sum += row.agreement_pct;
+    r.rows.push_back(row);
+    r.pairing.pairs.push_back({m, m, 0.99});
   }
-  // The correlation step's own MAC matrix (test rows), which the report shows as given.
-  const json mac = {{0.99, 0.02, 0.01}, {0.03, 0.98, 0.04}, {0.0, 0.05, 0.97}};
-  return {{"pairs", pairs}, {"unpaired_test", json::array()}, {"unpaired_model", json::array()}, {"mac", mac},
-          {"summary", {{"mean_agreement_pct", sum / 3}, {"min_agreement_pct", sum / 3}, {"mean_mac", 0.99}, {"shared_dofs", 12}}}};
+  r.mac.resize(3, 3);
+  r.mac << 0.99, 0.02, 0.01, 0.03, 0.98, 0.04, 0.0, 0.05, 0.97;
+  r.shared_dof_count = r.test_dof_count = 12;
+  r.mean_agreement_pct = r.min_agreement_pct = sum / 3;
+  r.mean_mac = 0.99;
+  return view;
 }
 
 ReportInput MakeInput() {
@@ -113,12 +124,12 @@ ReportInput MakeInput() {
   setup.frfs = MakeFrfs(truth, 0.01, 7);
   setup.band_lo_hz = 60.0;
   setup.band_hi_hz = 330.0;
-  setup.test_modes = truth.ModesJson(1.0, 0.02, 1);
-  setup.test_modes["modal_model"] = truth.ModalModelJson(60.0, 330.0);
-  setup.model_modes_before = truth.ModesJson(1.6, 0.05, 2);
-  setup.model_modes_after = truth.ModesJson(1.005, 0.02, 3);
-  setup.correlation_before = Correlation(truth, 1.6);
-  setup.correlation_after = Correlation(truth, 1.005);
+  curvefit::FitResult fit;
+  fit.modes = truth.Modes(1.0, 0.02, 1);
+  fit.model = truth.ModalModel(60.0, 330.0);
+  setup.correlation_before = Correlation(truth, fit.modes, 1.6);
+  setup.correlation_after = Correlation(truth, fit.modes, 1.005);
+  setup.fit = fit;
   // Stabilisation: true poles stable from order 6 on, plus a wandering spurious pole per order.
   json orders = json::array();
   for (int order = 2; order <= 40; order += 2) {
@@ -151,35 +162,43 @@ ReportInput MakeInput() {
   return input;
 }
 
-TEST(ReportData, ShapeTableFoldsNegativeDirections) {
-  const json modes = {{"modes", {{{"frequency_hz", 10.0}, {"damping_ratio", 0.01},
-                                   {"shape", {{{"node", 5}, {"dir", "-Z"}, {"value", {2.0, 1.0}}},
-                                              {{"node", 5}, {"dir", "+X"}, {"value", {1.0, 0.0}}}}}}}}};
-  const ShapeTable t = ReadShapeTable(modes);
-  ASSERT_EQ(t.dofs.size(), 2u);
-  EXPECT_EQ(t.dofs[1], (Dof{5, 3}));
-  EXPECT_EQ(t.shapes(1, 0), std::complex<double>(-2.0, -1.0));  // -Z value stored negated under +Z
+TEST(ReportData, ShapesFoldNegativeDirections) {
+  // A value measured along -Z is drawn as the opposite value along +Z (the animated shape).
+  ReportInput input = MakeInput();
+  SetupResults& setup = input.setups[0];
+  setup.geometry = {{5, {0.0, 0.0, 0.0}}};
+  ModeSet& modes = setup.fit->modes;
+  modes.dofs = {{5, -3}, {5, 1}};
+  modes.modes.resize(1);
+  modes.modes[0].shape = Eigen::VectorXcd(2);
+  modes.modes[0].shape << std::complex<double>(2.0, 1.0), std::complex<double>(1.0, 0.0);
+  const json shape = BuildReportData(input)["setups"][0]["shapes"]["modes"][0]["shape"][0];
+  const double largest = std::abs(std::complex<double>(2.0, 1.0));
+  ASSERT_EQ(shape.size(), 6u);  // re x, re y, re z, im x, im y, im z
+  EXPECT_NEAR(shape[0].get<double>(), 1.0 / largest, 1e-5);  // 5 significant digits on the page
+  EXPECT_NEAR(shape[2].get<double>(), -2.0 / largest, 1e-5);
+  EXPECT_NEAR(shape[5].get<double>(), -1.0 / largest, 1e-5);
 }
 
-TEST(ReportData, SynthesisIsTheFitsOwnModalModel) {
-  // The truth as a modal model (receptance residues phi_o phi_ref / (2j w_d), accelerance) must
-  // reproduce the analytic FRF to rounding inside the band, NaN outside it and for an FRF the
-  // model does not hold: the report evaluates the fit's model and re-fits nothing.
+TEST(ReportData, FitCurveIsTheFitsOwnModalModel) {
+  // The truth as the fit's modal model must reproduce the analytic FRF on the band (the page
+  // rounds to 5 significant digits) and be absent outside it: the report evaluates the fit's
+  // model (curvefit::SynthesiseMeasuredFrf) and re-fits nothing.
   Truth truth;
-  const json model = truth.ModalModelJson(60.0, 330.0);
-  const Eigen::VectorXd f = Eigen::VectorXd::LinSpaced(401, 0.0, 400.0);
+  const json frf = BuildReportData(MakeInput())["setups"][0]["frf"];
+  const json& f = frf["frequency_hz"];
   for (int o : {0, 5, 11}) {
-    const Eigen::VectorXcd h = SynthesiseFromModalModel(model, truth.dofs[o], truth.dofs[2], f);
-    for (int i = 0; i < f.size(); ++i) {
-      if (f[i] < 60.0 || f[i] > 330.0) {
-        EXPECT_TRUE(std::isnan(h[i].real())) << f[i];
+    const json& item = frf["frfs"][o];
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const double hz = f[i].get<double>();
+      if (hz < 60.0 || hz > 330.0) {
+        EXPECT_TRUE(item["fit_magnitude"][i].is_null()) << hz;
         continue;
       }
-      const std::complex<double> exact = truth.H(o, 2, f[i]);
-      EXPECT_LT(std::abs(h[i] - exact), 1e-9 * std::abs(exact)) << "output " << o << " at " << f[i] << " Hz";
+      const double exact = std::abs(truth.H(o, 2, hz));
+      EXPECT_NEAR(item["fit_magnitude"][i].get<double>(), exact, 1e-4 * exact) << "output " << o << " at " << hz << " Hz";
     }
   }
-  EXPECT_TRUE(std::isnan(SynthesiseFromModalModel(model, truth.dofs[0], truth.dofs[5], f)[200].real()));
 }
 
 TEST(ReportData, StabilisationLayouts) {
@@ -204,6 +223,7 @@ TEST(Report, PageIsSelfContainedAndCarriesTheData) {
   EXPECT_NE(html.find("plotly.js v"), std::string::npos);
   const json data = BuildReportData(MakeInput());
   ASSERT_EQ(data["setups"].size(), 1u);
+  EXPECT_EQ(data["setups"][0]["correlation_before"]["pairs"].size(), 3u);
   EXPECT_EQ(data["setups"][0]["frf"]["frfs"].size(), 12u);
   EXPECT_EQ(data["setups"][0]["mac_before"]["shared_dofs"], 12);
   EXPECT_EQ(data["setups"][0]["mac_before"]["values"][1][1], 0.98);  // the correlation's value, as given

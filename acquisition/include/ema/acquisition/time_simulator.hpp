@@ -62,7 +62,7 @@ class TimeIntegrator {
 
   /// The noise-free, DAQ-sampled force and responses of one impact at `ref` (pulses: start
   /// time s, peak N), steps of 1/(sample_rate_hz × oversampling). Elements are reset first.
-  /// Throws std::runtime_error when the iterations do not converge (time step too coarse for
+  /// Throws ema::ConvergenceError when the iterations do not converge (time step too coarse for
   /// an element's tangent stiffness: raise the oversampling).
   ImpactSignals Simulate(const Dof& ref, const std::vector<Dof>& responses,
                          const std::vector<std::pair<double, double>>& pulses, double pulse_duration_s,

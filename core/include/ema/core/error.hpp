@@ -46,6 +46,17 @@ class InputError : public std::runtime_error {
   }
 };
 
+/// A solver that did not converge on data that may well be fine (an eigensolver, a time
+/// integration step): not bad input, so the CLI maps it to its own exit code 3 and the caller can
+/// retry with other settings. The message names what did not converge and what to change.
+class ConvergenceError : public std::runtime_error {
+ public:
+  explicit ConvergenceError(const std::string& what) : std::runtime_error(InputError::Printable(what)) {}
+  /// Builds "where: what" (where = the model or plan file).
+  ConvergenceError(const std::string& where, const std::string& what)
+      : std::runtime_error(InputError::Printable(where.empty() ? what : where + ": " + what)) {}
+};
+
 /// Bad command-line usage: unknown option, missing argument. The CLI maps it to exit code 2.
 class UsageError : public std::runtime_error {
  public:

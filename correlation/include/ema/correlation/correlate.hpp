@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "ema/core/names.hpp"
 #include "ema/core/types.hpp"
 #include "ema/correlation/dof_match.hpp"
 #include "ema/correlation/pairing.hpp"
@@ -19,6 +20,14 @@ struct CorrelationOptions {
   /// Test damping ratio above which a mode is remarked "interface-dominated" (thesis §7.5:
   /// the modes governed by the air film/joints showed 1–5 % damping, the structure < 1 %).
   double interface_damping_ratio = 0.01;
+
+  /// True when every option is in range; else false with the violated condition in *why.
+  bool IsValid(std::string* why) const {
+    if (!pairing.IsValid(why)) return false;
+    if (!(dofs.tolerance_m >= 0.0)) return *why = "dofs.tolerance_m (--tolerance) must be >= 0", false;
+    if (!(interface_damping_ratio >= 0.0)) return *why = "interface_damping_ratio (--interface-damping) must be >= 0", false;
+    return true;
+  }
 };
 
 /// One row of the validation table.
@@ -65,6 +74,9 @@ struct CorrelationResult {
 CorrelationResult Correlate(const ModeSet& test, const ModeSet& model, const CorrelationOptions& options = {});
 
 enum class TableFormat { kMarkdown, kCsv, kHtml };
+/// `ema correlate --table FILE`: the format by the file's extension (lower case).
+inline constexpr EnumName<TableFormat> kTableFormatExtensions[] = {
+    {TableFormat::kMarkdown, ".md"}, {TableFormat::kCsv, ".csv"}, {TableFormat::kHtml, ".html"}, {TableFormat::kHtml, ".htm"}};
 
 /// The validation table (mode, model f, test f and damping, agreement %, Δf %, MAC, the test
 /// mode's MPC, MPD and MCF, remark) followed by the COMAC list, as text in the requested format.

@@ -1,6 +1,8 @@
 // Mode pairing by a linear assignment that maximises the total MAC (algorithms.md §5.4).
 #pragma once
 
+#include <string>
+
 #include <Eigen/Core>
 #include <vector>
 
@@ -21,6 +23,14 @@ struct PairingOptions {
   double frequency_weight = 1e-3;
   /// Pairs whose relative frequency difference exceeds this are rejected (1.0 = off in practice).
   double max_relative_frequency_difference = 1.0;
+
+  /// True when every option is in range; else false with the violated condition in *why.
+  bool IsValid(std::string* why) const {
+    if (!(mac_min >= 0.0 && mac_min <= 1.0)) return *why = "mac_min (--mac-min) must lie in [0, 1]", false;
+    if (!(frequency_weight >= 0.0)) return *why = "frequency_weight must be >= 0", false;
+    if (!(max_relative_frequency_difference > 0.0)) return *why = "max_relative_frequency_difference must be > 0", false;
+    return true;
+  }
 };
 
 struct ModePair {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "ema/core/names.hpp"
 #include "ema/core/progress.hpp"
 #include "ema/core/types.hpp"
 #include "ema/curvefit/fit_data.hpp"
@@ -17,6 +18,8 @@
 namespace ema::curvefit {
 
 enum class FitMethod { kPolymax, kPeak };
+/// `ema fit --method`.
+inline constexpr EnumName<FitMethod> kFitMethodNames[] = {{FitMethod::kPolymax, "polymax"}, {FitMethod::kPeak, "peak"}};
 
 /// Automatic selection's check for one mode fitted as two poles (roving-set inconsistency).
 struct SplitPoleOptions {
@@ -55,6 +58,22 @@ struct FitOptions {
   RefineMethod refine = RefineMethod::kMl;
   MlRefineOptions ml;
   SplitPoleOptions split_poles;  ///< automatic selection only
+
+  /// True when the options a user sets are in range; else false with the violated condition in
+  /// *why (Ceres style; the CLI option in parentheses).
+  bool IsValid(std::string* why) const {
+    if (!(data.band_lo_hz >= 0.0 && (data.band_hi_hz <= 0.0 || data.band_hi_hz > data.band_lo_hz)))
+      return *why = "data band (--band): expected 0 <= low < high", false;
+    if (polymax.order_max < 0) return *why = "polymax.order_max (--order-max) must be >= 0 (0: automatic)", false;
+    if (polymax.threads < 0) return *why = "polymax.threads (--threads): expected 0 (all cores) or a positive count", false;
+    for (const double f : select_frequencies_hz)
+      if (!(f > 0.0)) return *why = "select_frequencies_hz (--select): frequencies must be positive", false;
+    if (!(stability.frequency_tol > 0.0)) return *why = "stability.frequency_tol (--freq-tol) must be > 0", false;
+    if (!(stability.damping_tol > 0.0)) return *why = "stability.damping_tol (--damping-tol) must be > 0", false;
+    if (!(stability.mac_min >= 0.0 && stability.mac_min <= 1.0))
+      return *why = "stability.mac_min (--mac-min) must lie in [0, 1]", false;
+    return true;
+  }
 };
 
 /// The narrow-band retry of automatic selection: stability labels recomputed with the damping
@@ -80,6 +99,12 @@ struct ModalModel {
 
 /// The model's FRF from reference i to output o (FitData indices) at `frequency_hz`.
 Eigen::VectorXcd SynthesiseFrf(const ModalModel& model, int output, int reference, const Eigen::VectorXd& frequency_hz);
+
+/// The model's FRF from `reference` to `response` named as the measured FRF set names them
+/// (reciprocity undone when `transposed`), on the lines with f > 0 inside the model's band; NaN
+/// elsewhere, and on every line when the model does not hold that FRF (nothing is re-fitted).
+Eigen::VectorXcd SynthesiseMeasuredFrf(const ModalModel& model, const Dof& response, const Dof& reference,
+                                       const Eigen::VectorXd& frequency_hz);
 
 /// Seconds; stage figures are CPU times of the calling thread (see PolymaxTiming).
 struct FitTiming {

@@ -38,11 +38,21 @@ FrfSet ReadFrfSet(const std::filesystem::path& path);
 /// Writes FRFs (type 4) and coherences (type 6) with correct units and data-type codes.
 void WriteFrfSet(const std::filesystem::path& path, const FrfSet& frfs, const WriteOptions& options = {});
 
+/// What the UFF 58 file WriteFrfSet(path, frfs, options) writes holds, as ReadFrfSet returns
+/// it (numbers at the precision of their fields), computed without a file: a pipeline hands on
+/// exactly what a later command reading the file gets (formats/src/stored_view.cpp).
+FrfSet StoredFrfSet(const FrfSet& frfs, const WriteOptions& options = {});
+
 /// Mode shapes (UFF 55) with geometry from datasets 15/2411 when the file holds them.
 ModeSet ReadModeSet(const std::filesystem::path& path);
 
 /// Writes 151 header, 15 geometry (when known) and one 55 complex-mode dataset per mode.
 void WriteModeSet(const std::filesystem::path& path, const ModeSet& modes, const WriteOptions& options = {});
+
+/// What the UFF 55 file WriteModeSet(path, modes) writes holds, as ReadModeSet(path) returns it
+/// (shape values and poles to six significant digits, fields UFF has no place for dropped;
+/// source = the file name), computed without a file.
+ModeSet StoredModeSet(const ModeSet& modes, const std::filesystem::path& path);
 
 /// CSV hammer-test time data (docs/formats.md): header names carry role, node and direction
 /// (`time`, `force:1:+Z`, `acc:101:+X`, optional `[unit]` suffix, optional `impact` column).

@@ -27,6 +27,16 @@ struct SolveOptions {
   /// (2 pi rigid_frequency_hz)^2.
   double rigid_tolerance = 1e-12;
   double rigid_frequency_hz = 1e-3;
+
+  /// True when every option is in range; else false with the violated condition in *why
+  /// (Ceres style).
+  bool IsValid(std::string* why) const {
+    if (max_modes < 0) return *why = "max_modes (--max-modes) must be >= 0", false;
+    if (sparse_threshold < 1) return *why = "sparse_threshold must be >= 1", false;
+    if (!(rigid_tolerance >= 0.0)) return *why = "rigid_tolerance must be >= 0", false;
+    if (!(rigid_frequency_hz >= 0.0)) return *why = "rigid_frequency_hz must be >= 0", false;
+    return true;
+  }
 };
 
 /// Kinetic-energy share of each body (and "fe" for the FE part) in each mode.

@@ -1,4 +1,4 @@
-#include "project_file.hpp"
+#include "ema/formats/project_file.hpp"
 
 #include <set>
 #include <sstream>
@@ -7,17 +7,17 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/toml_fields.hpp"
 
-namespace ema::app {
+namespace ema::formats {
 
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string Where(const fs::path& file, const toml::node& node) { return formats::TomlFields(file.string()).At(node); }
+std::string Where(const fs::path& file, const toml::node& node) { return TomlFields(file.string()).At(node); }
 
 void CheckKeys(const fs::path& file, const toml::table& table, const std::set<std::string>& allowed,
                const std::string& context) {
-  formats::TomlFields(file.string()).CheckKeys(table, allowed, context);
+  TomlFields(file.string()).CheckKeys(table, allowed, context);
 }
 
 std::string String(const fs::path& file, const toml::node& node, const std::string& key) {
@@ -160,27 +160,4 @@ Project ReadProjectFile(const fs::path& path) {
   return project;
 }
 
-std::vector<Node> ReadModelPoints(const fs::path& model_file) {
-  std::vector<Node> nodes;
-  try {
-    const toml::table root = toml::parse_file(model_file.string());
-    if (const toml::array* points = root["point"].as_array()) {
-      for (const toml::node& node : *points) {
-        const toml::table* p = node.as_table();
-        if (!p) continue;
-        auto id = (*p)["id"].value<int64_t>();
-        const toml::array* at = (*p)["at"].as_array();
-        if (!id || !at || at->size() != 3) continue;
-        Node n;
-        n.id = static_cast<int>(*id);
-        for (int k = 0; k < 3; ++k) n.position[k] = at->get(k)->value<double>().value_or(0.0);
-        nodes.push_back(n);
-      }
-    }
-  } catch (const std::exception&) {
-    nodes.clear();  // the model reader of the pipeline reports the real error
-  }
-  return nodes;
-}
-
-}  // namespace ema::app
+}  // namespace ema::formats

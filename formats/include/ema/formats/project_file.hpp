@@ -10,7 +10,7 @@
 
 #include "ema/core/types.hpp"
 
-namespace ema::app {
+namespace ema::formats {
 
 /// One test of the project: a setup of the model and its measured data.
 struct ProjectTest {
@@ -31,13 +31,13 @@ struct Project {
   std::optional<std::pair<double, double>> band_hz;
   std::optional<int> order_max;
   std::string select = "auto";
-  std::vector<std::string> fit_extra;          ///< extra `ema fit` arguments, verbatim
+  std::vector<std::string> fit_extra;          ///< further `ema fit` options, parsed by the run
   // [diagnose]
-  std::vector<std::string> diagnose_extra;     ///< extra `ema diagnose` arguments, verbatim
+  std::vector<std::string> diagnose_extra;     ///< further `ema diagnose` options, parsed by the run
   // [report]
   std::string title;                           ///< defaults to the project name
   std::vector<std::pair<int, int>> lines;      ///< wireframe edges between test points
-  bool binary = false;                         ///< [output] binary = true: 58b FRF files
+  bool binary = false;                         ///< [output] binary = true: the FRF files are 58b
 };
 
 /// Reads and checks a project file. Relative paths are resolved against the file's folder.
@@ -45,8 +45,4 @@ struct Project {
 /// allowed there), a wrong type, no [[test]], or a data file that does not exist.
 Project ReadProjectFile(const std::filesystem::path& path);
 
-/// Test points of the model file's [[point]] entries (id and `at`), for the report's geometry.
-/// Points given by FE node are skipped. Never throws: an unreadable file gives an empty list.
-std::vector<Node> ReadModelPoints(const std::filesystem::path& model_file);
-
-}  // namespace ema::app
+}  // namespace ema::formats
