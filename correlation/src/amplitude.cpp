@@ -182,23 +182,9 @@ void MergeSplitPoles(const AmplitudeOptions& options, AmplitudeLevel* level, std
 
 }  // namespace
 
-std::string LevelKindToString(LevelKind kind) {
-  switch (kind) {
-    case LevelKind::kPeakForce: return "peak_force";
-    case LevelKind::kRmsForce: return "rms_force";
-    case LevelKind::kResponse: return "response";
-  }
-  return "peak_force";
-}
+std::string LevelKindToString(LevelKind kind) { return NameOf(kLevelKindNames, kind); }
 
-bool StringToLevelKind(const std::string& name, LevelKind* kind) {
-  for (LevelKind k : {LevelKind::kPeakForce, LevelKind::kRmsForce, LevelKind::kResponse})
-    if (name == LevelKindToString(k)) {
-      *kind = k;
-      return true;
-    }
-  return false;
-}
+bool StringToLevelKind(const std::string& name, LevelKind* kind) { return FromName(kLevelKindNames, name, kind); }
 
 std::string FrequencyTrendToString(FrequencyTrend trend) {
   switch (trend) {

@@ -313,13 +313,10 @@ SolveOutcome SolveWithCeres(const Problem& pr, const MlRefineOptions& options, s
 
 }  // namespace
 
-std::string RefineMethodToString(RefineMethod method) { return method == RefineMethod::kMl ? "ml" : "none"; }
+std::string RefineMethodToString(RefineMethod method) { return NameOf(kRefineMethodNames, method); }
 
 bool StringToRefineMethod(const std::string& text, RefineMethod* method) {
-  if (text == "ml") *method = RefineMethod::kMl;
-  else if (text == "none") *method = RefineMethod::kNone;
-  else return false;
-  return true;
+  return FromName(kRefineMethodNames, text, method);
 }
 
 std::string NoiseSourceToString(NoiseSource source) {

@@ -26,22 +26,10 @@ bool DiagnoseOptions::IsValid(std::string* error) const {
   return why.empty();
 }
 
-std::string CriterionToString(Criterion criterion) {
-  switch (criterion) {
-    case Criterion::kEvidence: return "evidence";
-    case Criterion::kBic: return "bic";
-    case Criterion::kAicc: return "aicc";
-  }
-  return "evidence";
-}
+std::string CriterionToString(Criterion criterion) { return NameOf(kCriterionNames, criterion); }
 
 bool StringToCriterion(const std::string& name, Criterion* criterion) {
-  for (Criterion c : {Criterion::kEvidence, Criterion::kBic, Criterion::kAicc})
-    if (name == CriterionToString(c)) {
-      *criterion = c;
-      return true;
-    }
-  return false;
+  return FromName(kCriterionNames, name, criterion);
 }
 
 namespace {

@@ -9,22 +9,16 @@ namespace ema::frf {
 using cd = std::complex<double>;
 
 Estimator ParseEstimator(const std::string& name) {
-  std::string u;
-  for (char c : name) u += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  if (u == "H1") return Estimator::kH1;
-  if (u == "H2") return Estimator::kH2;
-  if (u == "HV") return Estimator::kHv;
-  throw std::invalid_argument("unknown estimator '" + name + "' (expected H1, H2 or Hv)");
+  auto upper = [](std::string text) {
+    for (char& c : text) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    return text;
+  };
+  for (const EnumName<Estimator>& entry : kEstimatorNames)  // case-insensitive: "h1", "HV"
+    if (upper(name) == upper(entry.name)) return entry.value;
+  throw std::invalid_argument("unknown estimator '" + name + "' (expected " + NameList(kEstimatorNames) + ")");
 }
 
-std::string EstimatorName(Estimator e) {
-  switch (e) {
-    case Estimator::kH1: return "H1";
-    case Estimator::kH2: return "H2";
-    case Estimator::kHv: return "Hv";
-  }
-  return "?";
-}
+std::string EstimatorName(Estimator e) { return NameOf(kEstimatorNames, e); }
 
 void CrossSpectra::Resize(Eigen::Index lines) {
   gxx = Eigen::ArrayXd::Zero(lines);

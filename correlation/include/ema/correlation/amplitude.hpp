@@ -13,12 +13,15 @@
 #include <string>
 #include <vector>
 
+#include "ema/core/names.hpp"
 #include "ema/core/types.hpp"
 
 namespace ema::correlation {
 
 /// What the level of a mode set measures.
 enum class LevelKind { kPeakForce, kRmsForce, kResponse };
+inline constexpr EnumName<LevelKind> kLevelKindNames[] = {
+    {LevelKind::kPeakForce, "peak_force"}, {LevelKind::kRmsForce, "rms_force"}, {LevelKind::kResponse, "response"}};
 /// "peak_force", "rms_force", "response".
 std::string LevelKindToString(LevelKind kind);
 /// Inverse of LevelKindToString; false for an unknown name.

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "ema/core/names.hpp"
 #include "ema/curvefit/fit_data.hpp"
 #include "ema/curvefit/stabilisation.hpp"
 
@@ -35,6 +36,7 @@ namespace ema::curvefit {
 
 /// `ema fit --refine`: what follows PolyMAX/LSFD.
 enum class RefineMethod { kNone, kMl };
+inline constexpr EnumName<RefineMethod> kRefineMethodNames[] = {{RefineMethod::kMl, "ml"}, {RefineMethod::kNone, "none"}};
 std::string RefineMethodToString(RefineMethod method);
 /// "none" or "ml"; false for anything else.
 bool StringToRefineMethod(const std::string& text, RefineMethod* method);

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "ema/core/names.hpp"
 #include "ema/core/progress.hpp"
 #include "ema/core/types.hpp"
 #include "ema/correlation/dof_match.hpp"
@@ -29,6 +30,8 @@ struct SetupModes {
 /// evidence (misfit + prior + the posterior's width). kBic / kAicc: information criteria that
 /// ignore the priors (kept for comparison).
 enum class Criterion { kEvidence, kBic, kAicc };
+inline constexpr EnumName<Criterion> kCriterionNames[] = {
+    {Criterion::kEvidence, "evidence"}, {Criterion::kBic, "bic"}, {Criterion::kAicc, "aicc"}};
 /// "evidence", "bic", "aicc".
 std::string CriterionToString(Criterion criterion);
 /// The criterion of a name; false for an unknown name.

@@ -5,11 +5,14 @@
 #include <Eigen/Core>
 #include <string>
 
+#include "ema/core/names.hpp"
 #include "ema/core/types.hpp"
 
 namespace ema::frf {
 
 enum class Estimator { kH1, kH2, kHv };
+inline constexpr EnumName<Estimator> kEstimatorNames[] = {
+    {Estimator::kH1, "H1"}, {Estimator::kH2, "H2"}, {Estimator::kHv, "Hv"}};
 
 /// "H1" / "H2" / "Hv" (case-insensitive) → Estimator; throws std::invalid_argument otherwise.
 Estimator ParseEstimator(const std::string& name);
