@@ -9,16 +9,14 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/uff.hpp"
+#include "formats/tmp_file.hpp"
 
 namespace ema::formats {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TmpFile(const std::string& name) {
-  fs::create_directories(EMA_TEST_TMP_DIR);
-  return fs::path(EMA_TEST_TMP_DIR) / name;
-}
+using test::TmpFile;
 
 void WriteText(const fs::path& p, const std::string& s) {
   std::ofstream out(p, std::ios::binary);

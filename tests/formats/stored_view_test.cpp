@@ -9,16 +9,14 @@
 #include <random>
 
 #include "ema/formats/io.hpp"
+#include "formats/tmp_file.hpp"
 
 namespace ema::formats {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TmpFile(const std::string& name) {
-  fs::create_directories(EMA_TEST_TMP_DIR);
-  return fs::path(EMA_TEST_TMP_DIR) / name;
-}
+using test::TmpFile;
 
 // Equal as bits, NaN equal to NaN (lines outside a measured range read back as NaN).
 bool Same(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
