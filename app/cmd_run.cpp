@@ -120,7 +120,6 @@ std::string ParametersText(const json& parameters) {
   return out;
 }
 
-// Per-test file names inside OUTDIR/<test>/.
 // The report's "Data quality" section: the `ema quality` checks of the test's FRFs in the fit band.
 template <class Runner>
 nlohmann::json ReportQuality(const FrfSet& frfs, double lo_hz, double hi_hz, const std::string& source, Runner* runner) {
@@ -137,6 +136,7 @@ nlohmann::json ReportQuality(const FrfSet& frfs, double lo_hz, double hi_hz, con
   }
 }
 
+// Per-test file names inside OUTDIR/<test>/.
 struct TestFiles {
   fs::path dir, frf, frf_json, modes, modes_json, stabilisation, model_before, model_before_json, corr_before,
       corr_before_table, model_after, model_after_json, corr_after, corr_after_table;
