@@ -25,6 +25,8 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <utility>
+#include <vector>
 
 #include "internal.hpp"
 
@@ -136,6 +138,17 @@ std::pair<std::vector<int>, std::vector<double>> Sorted(const std::vector<int>& 
   return out;
 }
 
+// A fitted set without its k-th effect, the others' fitted parameters as the start.
+std::pair<std::vector<int>, std::vector<double>> WithoutOne(const Fit& f, size_t k) {
+  std::pair<std::vector<int>, std::vector<double>> out;
+  for (size_t i = 0; i < f.atoms.size(); ++i)
+    if (i != k) {
+      out.first.push_back(f.atoms[i]);
+      out.second.push_back(f.theta[i]);
+    }
+  return out;
+}
+
 }  // namespace
 
 SearchResult Search(Problem* p, const DiagnoseOptions& options) {
@@ -153,6 +166,13 @@ SearchResult Search(Problem* p, const DiagnoseOptions& options) {
     Fit f = FitSet(p, s, t, options);
     if (it != fitted.end() && !(f.objective < it->second.objective)) return it->second;
     return fitted[s] = std::move(f);
+  };
+  // Backward check of a fitted set: each effect dropped in turn, the rest re-fitted.
+  auto fit_each_without_one = [&](const Fit& full) {
+    for (size_t k = 0; k < full.atoms.size(); ++k) {
+      const auto [rest, rest_theta] = WithoutOne(full, k);
+      fit(rest, rest_theta);
+    }
   };
   const int total = static_cast<int>(atoms.size());
   int step = 0;
@@ -235,17 +255,7 @@ SearchResult Search(Problem* p, const DiagnoseOptions& options) {
     // Backward check: each effect of every new set dropped in turn, the rest re-fitted.
     for (const std::vector<int>& set : grown) {
       const Fit full = fitted.at(set);
-      if (!full.ok) continue;
-      for (size_t drop = 0; drop < set.size(); ++drop) {
-        std::vector<int> s;
-        std::vector<double> t;
-        for (size_t i = 0; i < set.size(); ++i)
-          if (i != drop) {
-            s.push_back(set[i]);
-            t.push_back(full.theta[i]);
-          }
-        fit(s, t);
-      }
+      if (full.ok) fit_each_without_one(full);
     }
     const auto best = best_of_size(size, 1);
     if (best.empty() || !(best.front()->score < best_so_far)) break;
@@ -257,13 +267,7 @@ SearchResult Search(Problem* p, const DiagnoseOptions& options) {
     for (const Fit* f : best_of_size(size, 1)) tops.push_back(*f);
   for (const Fit& top : tops) {
     for (size_t k = 0; k < top.atoms.size(); ++k) {
-      std::vector<int> rest;
-      std::vector<double> rest_theta;
-      for (size_t i = 0; i < top.atoms.size(); ++i)
-        if (i != k) {
-          rest.push_back(top.atoms[i]);
-          rest_theta.push_back(top.theta[i]);
-        }
+      const auto [rest, rest_theta] = WithoutOne(top, k);
       std::vector<std::pair<double, std::pair<int, double>>> swaps;
       for (int c = 0; c < total; ++c) {
         if (c == top.atoms[k] || !LookAlike(atoms[top.atoms[k]], atoms[c]) || !Compatible(atoms, top.atoms, c)) continue;
@@ -279,17 +283,7 @@ SearchResult Search(Problem* p, const DiagnoseOptions& options) {
         set.push_back(swap.first);
         theta.push_back(swap.second);
         const Fit swapped = fit(set, theta);
-        if (!swapped.ok) continue;
-        for (size_t drop = 0; drop < swapped.atoms.size(); ++drop) {
-          std::vector<int> sub;
-          std::vector<double> sub_theta;
-          for (size_t i = 0; i < swapped.atoms.size(); ++i)
-            if (i != drop) {
-              sub.push_back(swapped.atoms[i]);
-              sub_theta.push_back(swapped.theta[i]);
-            }
-          fit(sub, sub_theta);
-        }
+        if (swapped.ok) fit_each_without_one(swapped);
       }
     }
   }
