@@ -452,7 +452,11 @@ struct SecondHalf {
   std::uint64_t split = 0;             // byte offset of the start delimiter the worker began at
   std::vector<Dataset> datasets;
   std::vector<std::uint64_t> end_positions;  // file position after each dataset
-  std::vector<std::string> notes;
+  // The worker numbers lines from the split (the split's delimiter is its line 1): counting the
+  // lines of the first half would cost a pass over it. The caller knows the split's line number
+  // when it arrives there and shifts the datasets' lines and the notes by it.
+  std::vector<std::pair<std::int64_t, std::string>> notes;  // (line from the split, text)
+  std::int64_t line_shift = 0;  // caller's line of the split - 1, set in SplitReached
   bool ok = false;
   std::thread thread;
 };
@@ -467,6 +471,8 @@ struct Reader::Impl {
   ReadOptions options;
   std::string file;
   std::vector<std::string> file_notes;
+  bool numbering_from_split = false;  // the worker of a parallel read: notes kept with their line
+  std::vector<std::pair<std::int64_t, std::string>> split_notes;
   int datasets_read = 0;
   bool saw_content = false;
   std::string_view pending;  // a start delimiter already consumed
@@ -475,12 +481,17 @@ struct Reader::Impl {
   bool serving_second = false;         // datasets now come from `second`
   size_t served = 0;
 
-  void FileNote(std::string s) {
-    if (file_notes.size() < kMaxNotes) file_notes.push_back(std::move(s));
+  /// A note about the file at `line` ("line N: text").
+  void FileNote(std::int64_t line, std::string text) {
+    if (numbering_from_split) {
+      if (split_notes.size() < kMaxNotes) split_notes.emplace_back(line, std::move(text));
+    } else if (file_notes.size() < kMaxNotes) {
+      file_notes.push_back("line " + std::to_string(line) + ": " + text);
+    }
   }
 
   void StartSecondHalf(const std::filesystem::path& path);
-  bool SplitReached(std::uint64_t start_offset);
+  bool SplitReached(std::uint64_t start_offset, std::int64_t start_line);
   bool Next(Dataset* ds);
   void ReadAscii58(const Where& where, Function58* f, Dataset* ds);
   void ReadBinary58(std::string_view id_line, std::int64_t id_line_no, const Where& where, Function58* f, Dataset* ds);
@@ -539,27 +550,11 @@ void Reader::Impl::StartSecondHalf(const std::filesystem::path& path) {
   const ReadOptions opts = options;
   half->thread = std::thread([half, path, opts, split]() {
     try {
-      // Line numbers: count the lines before the split (page-cache speed).
-      std::int64_t lines_before = 0;
-      {
-        std::FILE* fp = std::fopen(path.c_str(), "rb");
-        if (!fp) return;
-        std::vector<char> buf(std::size_t{1} << 22);
-        std::uint64_t left = split;
-        while (left > 0) {
-          const size_t want = static_cast<size_t>(std::min<std::uint64_t>(left, buf.size()));
-          const size_t got = std::fread(buf.data(), 1, want, fp);
-          if (got == 0) break;
-          lines_before += std::count(buf.data(), buf.data() + got, '\n');
-          left -= got;
-        }
-        std::fclose(fp);
-      }
       ReadOptions worker_options = opts;
       worker_options.parallel_min_bytes = 0;  // no recursion
       Impl worker(path, worker_options);
       worker.in.Seek(split);
-      worker.in.AddLines(lines_before);
+      worker.numbering_from_split = true;
       worker.datasets_read = 1;  // past the "not a UFF file" checks of a file's start
       worker.saw_content = true;
       Dataset ds;
@@ -567,7 +562,7 @@ void Reader::Impl::StartSecondHalf(const std::filesystem::path& path) {
         half->datasets.push_back(std::move(ds));
         half->end_positions.push_back(worker.in.Position());
       }
-      half->notes = std::move(worker.file_notes);
+      half->notes = std::move(worker.split_notes);
       half->ok = !half->datasets.empty() && half->datasets.front().offset == split;
     } catch (...) {
       half->ok = false;  // the sequential read will meet (and report) the same problem
@@ -577,14 +572,15 @@ void Reader::Impl::StartSecondHalf(const std::filesystem::path& path) {
 
 // Called with the offset of each start delimiter the sequential parse finds: true when the worker's
 // datasets take over from here (the split is confirmed and the worker succeeded).
-bool Reader::Impl::SplitReached(std::uint64_t start_offset) {
+bool Reader::Impl::SplitReached(std::uint64_t start_offset, std::int64_t start_line) {
   if (!second || serving_second || start_offset < second->split) return false;
   if (second->thread.joinable()) second->thread.join();
   if (start_offset != second->split || !second->ok) {
     second.reset();  // not a real boundary, or the worker failed: keep streaming
     return false;
   }
-  for (auto& note : second->notes) FileNote(std::move(note));
+  second->line_shift = start_line - 1;
+  for (auto& [line, text] : second->notes) FileNote(line + second->line_shift, std::move(text));
   serving_second = true;
   return true;
 }
@@ -593,6 +589,7 @@ bool Reader::Impl::Next(Dataset* ds) {
   if (serving_second) {
     if (served >= second->datasets.size()) return false;
     *ds = std::move(second->datasets[served++]);
+    ds->line += second->line_shift;
     ++datasets_read;
     return true;
   }
@@ -616,20 +613,20 @@ bool Reader::Impl::Next(Dataset* ds) {
     if (IsDelimiterLine(line)) {
       start_line = in.LineNumber();
       start_offset = in.LineStart();
-      if (SplitReached(start_offset)) return Next(ds);
+      if (SplitReached(start_offset, start_line)) return Next(ds);
       break;
     }
-    if (second && !serving_second && in.LineStart() > second->split) SplitReached(in.LineStart());  // passed it: discard
+    if (second && !serving_second && in.LineStart() > second->split) SplitReached(in.LineStart(), in.LineNumber());  // passed it: discard
     if (!Trim(line).empty()) {
       if (datasets_read == 0 && junk == 0 && in.LineNumber() > 200)
         throw InputError(file + ":1", "not a UFF file: no '    -1' dataset delimiter in the first 200 lines");
-      if (++junk == 1) FileNote("line " + std::to_string(in.LineNumber()) + ": text outside a dataset ignored");
+      if (++junk == 1) FileNote(in.LineNumber(), "text outside a dataset ignored");
     }
   }
   // DATASET_NUMBER
   for (;;) {
     if (!in.NextLine(&line)) {
-      FileNote("line " + std::to_string(start_line) + ": '-1' at the end of the file without a dataset");
+      FileNote(start_line, "'-1' at the end of the file without a dataset");
       return false;
     }
     if (IsDelimiterLine(line)) {  // stray end delimiter: the new one starts the dataset
@@ -889,7 +886,7 @@ void Reader::Impl::ReadAscii58(const Where& where, Function58* f, Dataset* ds) {
   f->values_read = parse;
   if (!parse) return;
   const size_t ky = f->IsComplex() ? 2 : 1;
-  if (f->even && layout.k == ky) {
+  if (f->even && static_cast<size_t>(layout.k) == ky) {
     // The values already are y (real, or re/im pairs): handed over, not copied (a copy of a
     // 0.5 GB file's payload costs a tenth of its read in page faults alone).
     f->y = std::move(values);
