@@ -204,9 +204,9 @@ class Reader : public TomlFields {
       law.k = Number(Require(b, "k", ctx), "k");
       law.slip_force = Number(Require(b, "slip_force", ctx), "slip_force");
       if (const toml::node* e = b.get("elements")) {
-        const auto v = e->value<int64_t>();
-        if (!e->is_integer() || !v || *v < 1) throw InputError(At(*e), ctx + ": 'elements' must be a positive integer");
-        law.elements = static_cast<int>(*v);
+        const auto v = IntValue(*e);
+        if (!v || *v < 1) throw InputError(At(*e), ctx + ": 'elements' must be a positive integer");
+        law.elements = *v;
       }
       return law;
     }
@@ -234,9 +234,9 @@ class Reader : public TomlFields {
     const toml::node* node = t.get("node");
     if (body && node) throw InputError(At(t), context + ": give either 'body' or 'node', not both");
     if (node) {
-      const auto id = node->value<int64_t>();
-      if (!id || !node->is_integer() || *id <= 0) throw InputError(At(*node), context + ": 'node' must be a positive integer");
-      a.node = static_cast<int>(*id);
+      const auto id = IntValue(*node);
+      if (!id || *id <= 0) throw InputError(At(*node), context + ": 'node' must be a positive integer");
+      a.node = *id;
       return a;
     }
     if (!body) throw InputError(At(t), context + ": missing key 'body' (or 'node')");
@@ -444,8 +444,9 @@ class Reader : public TomlFields {
       model::TestPoint p;
       p.line = Line(t);
       const toml::node& id = Require(t, "id", "[[point]]");
-      if (!id.is_integer() || *id.value<int64_t>() <= 0) throw InputError(At(id), "[[point]]: id must be a positive integer");
-      p.id = static_cast<int>(*id.value<int64_t>());
+      const auto id_value = IntValue(id);
+      if (!id_value || *id_value <= 0) throw InputError(At(id), "[[point]]: id must be a positive integer");
+      p.id = *id_value;
       if (!ids.insert(p.id).second) throw InputError(At(t), "[[point]]: id " + std::to_string(p.id) + " appears twice");
       p.where = AnchorFrom(t, "point " + std::to_string(p.id), true);
       check_body(p.where, t, "point " + std::to_string(p.id));

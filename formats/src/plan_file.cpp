@@ -25,8 +25,9 @@ class PlanReader : public TomlFields {
   int Integer(const toml::table& t, const std::string& key, int fallback) const {
     const toml::node* n = t.get(key);
     if (!n) return fallback;
-    if (!n->is_integer()) throw InputError(At(*n), "key '" + key + "': expected an integer");
-    return static_cast<int>(*n->value<int64_t>());
+    const auto v = IntValue(*n);
+    if (!v) throw InputError(At(*n), "key '" + key + "': expected an integer (within ±2147483647)");
+    return *v;
   }
   bool Bool(const toml::table& t, const std::string& key, bool fallback) const {
     const toml::node* n = t.get(key);

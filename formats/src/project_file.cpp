@@ -122,9 +122,9 @@ Project ReadProjectFile(const fs::path& path) {
       project.band_hz = std::make_pair(lo, hi);
     }
     if (const toml::node* order = (*fit)["order_max"].node()) {
-      auto v = order->value<int64_t>();
+      const auto v = IntValue(*order);
       if (!v || *v < 1) throw InputError(Where(file, *order), "'order_max' must be a positive integer");
-      project.order_max = static_cast<int>(*v);
+      project.order_max = *v;
     }
     if ((*fit)["select"]) project.select = String(file, *(*fit)["select"].node(), "select");
     if ((*fit)["args"]) project.fit_extra = Strings(file, *(*fit)["args"].node(), "args");
@@ -142,10 +142,10 @@ Project ReadProjectFile(const fs::path& path) {
       if (!a) throw InputError(Where(file, *lines), "'lines' must be an array of [node, node] pairs");
       for (const toml::node& pair : *a) {
         const toml::array* p = pair.as_array();
-        auto first = p && p->size() == 2 ? p->get(0)->value<int64_t>() : std::nullopt;
-        auto second = p && p->size() == 2 ? p->get(1)->value<int64_t>() : std::nullopt;
+        const auto first = p && p->size() == 2 ? IntValue(*p->get(0)) : std::nullopt;
+        const auto second = p && p->size() == 2 ? IntValue(*p->get(1)) : std::nullopt;
         if (!first || !second) throw InputError(Where(file, pair), "each entry of 'lines' must be [node, node]");
-        project.lines.emplace_back(static_cast<int>(*first), static_cast<int>(*second));
+        project.lines.emplace_back(*first, *second);
       }
     }
   }

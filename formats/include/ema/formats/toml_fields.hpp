@@ -3,6 +3,9 @@
 // Header-only; the includer needs toml++ (Debian's libtomlplusplus-dev).
 #pragma once
 
+#include <cstdint>
+#include <limits>
+#include <optional>
 #include <set>
 #include <string>
 #include <toml++/toml.h>
@@ -11,6 +14,18 @@
 #include "ema/core/error.hpp"
 
 namespace ema::formats {
+
+/// The node's value when it is a TOML integer within int's range; nothing otherwise (a float, a
+/// string, 2^40). Every integer key goes through here rather than node::value<int64_t>(): on a
+/// float that one casts before its range check (undefined behaviour for `node = 7.7e105`, found
+/// by fuzz_model_file), and a plain int cast would wrap 2^32 + 1 to node 1.
+inline std::optional<int> IntValue(const toml::node& n) {
+  const toml::value<std::int64_t>* v = n.as_integer();
+  if (!v) return std::nullopt;
+  const std::int64_t x = v->get();
+  if (x < std::numeric_limits<int>::min() || x > std::numeric_limits<int>::max()) return std::nullopt;
+  return static_cast<int>(x);
+}
 
 class TomlFields {
  public:
