@@ -2,9 +2,13 @@
 // reading the files with awk/grep/sed (see the comments), not by running this reader.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <random>
 #include <sstream>
 
 #include "ema/core/error.hpp"
@@ -285,6 +289,61 @@ TEST(UffCorpus, TextQuirks) {
   EXPECT_EQ(std::get<Function58>(utf[0].body).y, std::get<Function58>(frf[0].body).y);
   // Latin-1 byte in a label.
   EXPECT_NO_THROW(ReadFile(Data("pyuff/non_ascii_header.uff")));
+}
+
+// The reader's fixed-position fast paths (E13.5 and E20.12, the canonical single and double forms
+// of record 12) must give exactly strtod's correctly rounded double for every field, and leave
+// what they cannot do exactly (exponents beyond 10^±22 after scaling, other widths) to the general
+// parser with the same result. Values: random 13-digit mantissas over 10^-40..10^40 and the edges
+// of the fast range, printed by C's %20.12E / %13.5E as a writer would.
+TEST(UffValues, CanonicalFieldsReadExactlyAsStrtod) {
+  std::mt19937_64 rng(18);
+  std::uniform_real_distribution<double> mantissa(1.0, 10.0);
+  std::uniform_int_distribution<int> exponent(-40, 40);
+  for (const auto& [width, format] : {std::pair{20, "%20.12E"}, std::pair{13, "%13.5E"}}) {
+    std::vector<std::string> fields;
+    for (double v : {0.0, -0.0, 1.0, -1.0, 9.999999999999e22, 1e-10, 1e-11, 1.5e34, 1.5e35, 4.9406564584124654e-324,
+                     1.7976931348623157e308, 2.2250738585072014e-308}) {
+      char buf[40];
+      std::snprintf(buf, sizeof buf, format, v);
+      fields.emplace_back(buf);
+    }
+    for (int k = 0; k < 4000; ++k) {
+      const double v = (k % 2 ? -1.0 : 1.0) * mantissa(rng) * std::pow(10.0, exponent(rng));
+      char buf[40];
+      std::snprintf(buf, sizeof buf, format, v);
+      fields.emplace_back(buf);
+    }
+    Function58 f;
+    f.function_type = 1;
+    f.ordinate_type = width == 20 ? 4 : 2;
+    f.count = static_cast<std::int64_t>(fields.size());
+    f.dx = 1.0;
+    f.y.assign(fields.size(), 0.0);
+    std::ostringstream text;
+    WriteDataset(text, Dataset{58, 0, 0, {}, f}, WriteOptions{});
+    // Replace the written values by the fields above (same layout: 4 or 6 per line).
+    std::string file = text.str();
+    size_t values_at = 0;  // after "-1", "58" and records 1-11
+    for (int line = 0; line < 13; ++line) values_at = file.find('\n', values_at) + 1;
+    const int per_line = width == 20 ? 4 : 6;
+    std::string values;
+    for (size_t i = 0; i < fields.size(); ++i) {
+      ASSERT_EQ(fields[i].size(), static_cast<size_t>(width)) << fields[i];
+      values += fields[i];
+      if ((i + 1) % per_line == 0 || i + 1 == fields.size()) values += '\n';
+    }
+    file = file.substr(0, values_at) + values + "    -1\n";
+    const fs::path path = Tmp("canonical_fields_" + std::to_string(width) + ".unv");
+    std::ofstream(path, std::ios::binary) << file;
+    const auto read = std::get<Function58>(ReadFile(path).at(0).body);
+    ASSERT_EQ(read.y.size(), fields.size());
+    for (size_t i = 0; i < fields.size(); ++i) {
+      const double expected = std::strtod(fields[i].c_str(), nullptr);
+      ASSERT_EQ(std::memcmp(&read.y[i], &expected, sizeof expected), 0)
+          << "field " << i << " '" << fields[i] << "': read " << read.y[i] << ", strtod " << expected;
+    }
+  }
 }
 
 TEST(UffCorpus, GeometryDatasets) {
