@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <complex>
 #include <ctime>
 #include <map>
 #include <set>
@@ -315,8 +316,12 @@ FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Functi
     index_of(set.references, {static_cast<int>(it.f.reference_node), it.f.reference_direction});
   }
   const std::complex<double> nan_c(kNaN, kNaN);
-  set.h.resize(set.references.size());  // each block filled in place (no temporary to copy)
-  for (Eigen::MatrixXcd& block : set.h) block.setConstant(lines, set.OutputCount(), nan_c);
+  // Each block filled in place (no temporary to copy). Lines no dataset covers are NaN: filled
+  // per column the first time a dataset writes it (outside its range) and, at the end, for the
+  // columns none wrote, rather than NaN over the whole set first and the values over that.
+  set.h.resize(set.references.size());
+  for (Eigen::MatrixXcd& block : set.h) block.resize(lines, set.OutputCount());
+  std::vector<char> written(set.references.size() * static_cast<size_t>(set.OutputCount()), 0);
   bool quantity_set = false;
   std::map<std::pair<int, int>, int> averages;
   for (auto& it : frfs) {
@@ -329,7 +334,15 @@ FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Functi
     std::int64_t m;
     grid_of(it, &a, &b, &m);
     const std::int64_t off = n > 1 ? std::llround((a - lo) / dx) : 0;
-    for (std::int64_t i = 0; i < m; ++i) set.h[r](off + i, o) = {f.y[2 * i], f.y[2 * i + 1]};
+    std::complex<double>* column = set.h[r].col(o).data();
+    char& seen = written[static_cast<size_t>(r) * set.OutputCount() + o];
+    if (!seen) {
+      std::fill(column, column + off, nan_c);
+      std::fill(column + off + m, column + lines, nan_c);
+      seen = 1;
+    }
+    // y holds re, im pairs: the array layout of std::complex<double> ([complex.numbers]).
+    std::copy(f.y.data(), f.y.data() + 2 * m, reinterpret_cast<double*>(column + off));
     const Quantity q = QuantityOf(f.axes[1].specific_data_type);
     if (!quantity_set && q != Quantity::kUnknown && q != Quantity::kForce) {
       set.output_quantity = q;
@@ -344,6 +357,9 @@ FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Functi
     if (GetDouble(keys, "roving_hammer", &v)) set.roving_hammer = v != 0.0;
     std::vector<double>().swap(f.y);  // copied: its memory serves the next stage, not a second copy
   }
+  for (int r = 0; r < set.ReferenceCount(); ++r)
+    for (int o = 0; o < set.OutputCount(); ++o)
+      if (!written[static_cast<size_t>(r) * set.OutputCount() + o]) set.h[r].col(o).setConstant(nan_c);
   if (!averages.empty()) {
     set.averages = Eigen::MatrixXi::Zero(set.ReferenceCount(), set.OutputCount());
     for (const auto& [k, v] : averages) set.averages(k.first, k.second) = v;
