@@ -2,39 +2,77 @@
 # From a fresh clone to results. Usage:
 #   scripts/quickstart.sh             install what is missing, build, run the main job on the sample
 #   scripts/quickstart.sh --test      install what is missing, build, run the whole test suite, then
-#                                     the sanitizer suite (the --sanitize step below)
+#                                     the sanitizer suite with the fuzz smoke runs (--sanitize below)
 #   scripts/quickstart.sh --sanitize  only the sanitizer suite: build-asan/ (ASan + UBSan, leaks
-#                                     checked, no recovery) and its ctest run (docs/reliability.md)
+#                                     checked, no recovery; the fuzz targets too when clang is
+#                                     installed) and its ctest run (docs/reliability.md)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode="${1:-}"
 jobs=$(nproc 2>/dev/null || echo 2)
 
-# The sanitizer suite: every test but the packaging check (it installs and rebuilds a consumer,
-# no ema code runs), the headless-Chromium checks (Chromium itself is not built with ASan) and
-# the diagnosis benchmark's 25 cases (the same chain as the guideway and acceptance tests, which
-# do run under ASan; 25 sanitized chains would add over 12 min to CI).
+# Runs one step and says how long it took (the CI time table in docs/reliability.md is read off
+# these lines).
+step() {
+  local name="$1" start=$SECONDS
+  shift
+  "$@"
+  echo "ema quickstart: ${name} took $((SECONDS - start)) s" >&2
+}
+
+# ccache, when the machine has it, makes a rebuild of unchanged sources free (CI's clean clone
+# gains nothing from it, a developer's second run does).
+launcher=()
+if command -v ccache >/dev/null 2>&1; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+
+# The sanitizer suite, in one tree that also builds the parsers' libFuzzer targets (clang, when
+# installed: ASan + UBSan on every target, the libraries at -O2 and the rest at -O1, the parsers
+# instrumented for coverage; docs/reliability.md "CI time"). Every test runs but the packaging
+# check (it installs and rebuilds a consumer, no ema code runs), the headless-Chromium checks
+# (Chromium itself is not built with ASan) and the diagnosis benchmark's 25 cases (the same chain
+# as the guideway and acceptance tests, which do run under ASan); then each fuzz target's smoke run.
 sanitize() {
-  cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Release -DEMA_SANITIZE=ON -DEMA_BUILD_BENCH=OFF >/dev/null
-  cmake --build build-asan -j"${jobs}"
-  ctest --test-dir build-asan --output-on-failure -j"${jobs}" --timeout 1800 -E 'packaging/|Chromium|diagnosis-benchmark/'
+  local compiler=() fuzz=(-DEMA_BUILD_FUZZ=OFF)
+  if command -v clang++ >/dev/null 2>&1; then
+    compiler=(-DCMAKE_CXX_COMPILER=clang++)
+    fuzz=(-DEMA_BUILD_FUZZ=ON)
+  fi
+  # A tree configured earlier with the other compiler cannot switch in place: start it afresh.
+  if [[ -f build-asan/CMakeCache.txt ]]; then
+    local cached
+    cached=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' build-asan/CMakeCache.txt)
+    local want_clang=no cached_clang=no
+    ((${#compiler[@]})) && want_clang=yes
+    [[ "${cached}" == *clang* ]] && cached_clang=yes
+    if [[ "${want_clang}" != "${cached_clang}" ]]; then
+      rm -rf build-asan/CMakeCache.txt build-asan/CMakeFiles
+    fi
+  fi
+  step "sanitizer configure" cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Release -DEMA_SANITIZE=ON -DEMA_BUILD_BENCH=OFF \
+        "${compiler[@]}" "${fuzz[@]}" "${launcher[@]}" >/dev/null
+  step "sanitizer build" cmake --build build-asan -j"${jobs}"
+  step "sanitizer suite" ctest --test-dir build-asan --output-on-failure -j"${jobs}" --timeout 1800 \
+       -E 'packaging/|Chromium|diagnosis-benchmark/'
 }
 
 if [[ "${mode}" == "--sanitize" ]]; then
-  bash scripts/install-deps.sh --test
+  step "install" bash scripts/install-deps.sh --test
   sanitize
   exit 0
 fi
-bash scripts/install-deps.sh ${mode}
+step "install" bash scripts/install-deps.sh ${mode}
 extra=()
-# The test run also builds the parsers' libFuzzer targets and runs each briefly (needs clang).
-if [[ "${mode}" == "--test" ]] && command -v clang++ >/dev/null 2>&1; then
-  extra+=(-DEMA_BUILD_FUZZ=ON)
-fi
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${extra[@]}" >/dev/null
-cmake --build build -j"${jobs}"
+# The test run leaves the benchmark programs out (bench/: built where asked, docs/performance.md);
+# the fuzz targets are built and run in the sanitizer tree.
 if [[ "${mode}" == "--test" ]]; then
-  ctest --test-dir build --output-on-failure -j"${jobs}" --timeout 900
+  extra+=(-DEMA_BUILD_BENCH=OFF -DEMA_BUILD_FUZZ=OFF)
+fi
+step "configure" cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${extra[@]}" "${launcher[@]}" >/dev/null
+step "build" cmake --build build -j"${jobs}"
+if [[ "${mode}" == "--test" ]]; then
+  step "suite" ctest --test-dir build --output-on-failure -j"${jobs}" --timeout 900
   sanitize
 else
   bash scripts/main-job.sh
