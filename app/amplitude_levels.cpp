@@ -1,4 +1,5 @@
 #include "amplitude_levels.hpp"
+#include "ema/formats/json_codecs.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -81,11 +82,52 @@ json AmplitudeJson(const correlation::AmplitudeResult& r) {
 }
 
 
+bool ReadSidecarTestSets(const std::string& modes_path, const ModeSet& modes, std::vector<std::vector<int>>* roving_sets,
+                         Dof* reference) {
+  std::filesystem::path side = modes_path;
+  std::error_code ec;
+  if (side.extension() != ".json") side.replace_extension(".json");
+  if (!std::filesystem::is_regular_file(side, ec)) return false;
+  json j;
+  try {
+    std::ifstream in(side);
+    j = json::parse(in);
+  } catch (const std::exception&) {
+    return false;
+  }
+  // A sidecar must hold the same modes as the file beside it.
+  if (!j.is_object() || !j.contains("modes") || !j["modes"].is_array() || j["modes"].size() != modes.modes.size())
+    return false;
+  return formats::ReadTestSets(j, roving_sets, reference);
+}
+
 void AttachSidecarUncertainty(const std::string& modes_path, ModeSet* modes) {
   const std::vector<correlation::ModeUncertainty> u = SidecarUncertainty(modes_path, *modes);
   for (std::size_t i = 0; i < u.size() && i < modes->modes.size(); ++i) {
     modes->modes[i].frequency_std_hz = u[i].frequency_std_hz;
     modes->modes[i].damping_ratio_std = u[i].damping_ratio_std;
+  }
+  if (u.empty()) return;
+  // Roving-sensor tests: each mode as every roving set saw it ("sets" of `ema fit --json`).
+  std::filesystem::path side = modes_path;
+  side.replace_extension(".json");
+  try {
+    std::ifstream in(side);
+    const json j = json::parse(in);
+    for (std::size_t i = 0; i < modes->modes.size(); ++i) {
+      const json& m = j["modes"][i];
+      if (!m.contains("sets") || !m["sets"].is_array()) continue;
+      Mode& mode = modes->modes[i];
+      for (const json& s : m["sets"]) {
+        if (!s.is_object() || !s.contains("frequency_hz") || !s["frequency_hz"].is_number()) break;
+        mode.set_frequency_hz.push_back(s["frequency_hz"].get<double>());
+        mode.set_damping_ratio.push_back(s.contains("damping_ratio") && s["damping_ratio"].is_number()
+                                             ? s["damping_ratio"].get<double>() : kNaN);
+        mode.set_frequency_std_hz.push_back(s.contains("frequency_std_hz") && s["frequency_std_hz"].is_number()
+                                                ? s["frequency_std_hz"].get<double>() : kNaN);
+      }
+    }
+  } catch (const std::exception&) {
   }
 }
 

@@ -24,6 +24,12 @@ std::vector<std::string> AmplitudeLevelFiles(const std::vector<std::string>& lev
 /// `ema diagnose` to weigh each test mode by how well it was measured.
 void AttachSidecarUncertainty(const std::string& modes_path, ModeSet* modes);
 
+/// The roving sets and the hammer DOF of a test as `ema fit --json` records them: read from the
+/// modes file itself when it is MODES.json, else from the `ema fit --json` file beside it (same
+/// stem, .json) when that holds the same modes. False when neither knows them.
+bool ReadSidecarTestSets(const std::string& modes_path, const ModeSet& modes, std::vector<std::vector<int>>* roving_sets,
+                         Dof* reference);
+
 /// The JSON of cli.md ("ema amplitude").
 nlohmann::json AmplitudeJson(const correlation::AmplitudeResult& result);
 

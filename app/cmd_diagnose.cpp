@@ -1,6 +1,8 @@
 // ema diagnose MODEL.toml --test [SETUP=]MODES.unv [--test SETUP2=MODES2.unv ...]
 //               [--json DIAG.json] [-o UPDATED.toml] [--force-level F=MODES.unv ...]
 // Ranks the physical effects the model is missing (cli.md, issue 7).
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -18,6 +20,7 @@
 #include "ema/formats/model_file.hpp"
 #include "ema/formats/json_codecs.hpp"
 #include "ema/model/effects.hpp"
+#include "ema/model/solve.hpp"
 #include "stages.hpp"
 
 namespace ema {
@@ -53,36 +56,151 @@ std::string ModeTable(const diagnose::Candidate& before, const diagnose::Candida
   return out.str();
 }
 
-// One line for the user: what, where (members named), how sure.
-std::string DiagnosisSummary(const diagnose::Diagnosis& d) {
-  const diagnose::Candidate& first = d.candidates.front();
-  char p[32];
-  std::snprintf(p, sizeof p, "%.1f %%", 100.0 * first.probability);
-  if (first.effects.empty()) return std::string("Diagnosis: no missing effect (probability ") + p + ").";
-  std::vector<std::string> parts;
-  for (const auto& e : first.effects) {
-    const auto slash = e.target.find('/');
-    std::string where = slash == std::string::npos
-                            ? e.target
-                            : "member " + e.target.substr(slash + 1) + " of " + e.target.substr(0, slash);
-    parts.push_back(e.kind + " on " + where);
+std::string Number(double v, int digits = 3) {
+  char b[48];
+  std::snprintf(b, sizeof b, "%.*g", digits, v);
+  return b;
+}
+
+// A fitted parameter in engineering units with its 1σ: "E' = 57.2 ± 1.1 GPa", "× 0.31 ± 0.02".
+std::string ParameterWords(const diagnose::FittedParameter& p, const model::Effect& e) {
+  const bool sigma = std::isfinite(p.sigma);
+  auto with = [&](double scale, const std::string& unit, const std::string& name) {
+    return name + Number(p.value * scale) + (sigma ? " ± " + Number(p.sigma * scale, 2) : "") + unit;
+  };
+  const bool hertz = e.law && std::holds_alternative<model::HertzLaw>(e.law->value);
+  if (p.name == "modulus" || hertz) {
+    double radius = kNaN;
+    if (hertz) radius = std::get<model::HertzLaw>(e.law->value).radius;
+    return with(1e-9, " GPa", "Hertz contact E' = ") + (std::isfinite(radius) ? " (R' = " + Number(radius * 1e3) + " mm)" : "");
   }
-  std::string out = "Diagnosis: ";
-  for (size_t i = 0; i < parts.size(); ++i) out += (i ? " + " : "") + parts[i];
-  out += " (probability " + std::string(p) + ").";
-  // Rank 1 may share its probability with near-equal variants (another point, another member):
-  // how sure each of its effects is, whichever candidate holds it.
-  if (first.probability < 0.9) {
-    for (const auto& e : first.effects) {
-      const std::string wildcard = diagnose::EffectWildcard(e.target);
-      for (const auto& ep : d.effect_probabilities)
-        if (ep.kind == e.kind && ep.target == wildcard) {
-          std::snprintf(p, sizeof p, "%.1f %%", 100.0 * ep.probability);
-          out += "\n  " + e.kind + " on " + wildcard + ": " + p + " over all candidates";
-        }
+  if (p.effect_kind == "series_compliance" || p.effect_kind == "ground_spring") return with(1e-6, " N/µm", "k = ");
+  if (p.effect_kind == "added_mass") return with(1e3, " g per point", "");
+  if (p.effect_kind == "operating_point")
+    return std::abs(p.value) < 1e-3 ? with(1e6, " µm", "value = ") : with(1.0, "", "value = ");
+  return with(1.0, "", "factor ");
+}
+
+// Per setup, the mean linearised stiffness of a spring group's springs with rank 1's effects, and
+// of the series element the effect added: the numbers of a mount or joint an engineer compares
+// with a catalogue ("per spring: 2.80 N/µm at stud-5um, ...").
+std::string SpringStiffnessWords(const model::Model& model, const std::vector<model::Effect>& effects,
+                                 const model::Effect& e, const std::vector<std::string>& setups) {
+  if (model::TargetSprings(model, e.target).empty()) return "";
+  model::Model updated = model;
+  for (const auto& x : effects) updated = model::ApplyEffect(updated, x);
+  const std::vector<int> springs = model::TargetSprings(updated, e.target);
+  std::vector<std::string> whole, element;
+  for (const std::string& setup : setups) {
+    model::SolveOptions so;
+    so.setup = setup;
+    const model::Solution sol = model::Solve(updated, so);
+    double k = 0.0, k_element = 0.0;
+    int n = 0, n_element = 0;
+    for (int i : springs) {
+      const model::SpringState& st = sol.springs[static_cast<size_t>(i)];
+      k += st.stiffness;
+      ++n;
+      if (e.kind == "series_compliance" && !st.element_stiffnesses.empty())
+        k_element += st.element_stiffnesses.back(), ++n_element;
     }
+    const std::string at = setup.empty() ? "" : " at " + setup;
+    if (n) whole.push_back(Number(k / n / 1e6) + " N/µm" + at);
+    if (n_element) element.push_back(Number(k_element / n_element / 1e6) + " N/µm" + at);
+  }
+  if (whole.empty()) return "";
+  std::string out = "per spring of '" + e.target + "' now: ";
+  for (size_t i = 0; i < whole.size(); ++i) out += (i ? ", " : "") + whole[i];
+  if (!element.empty()) {
+    out += " (the element in series alone: ";
+    for (size_t i = 0; i < element.size(); ++i) out += (i ? ", " : "") + element[i];
+    out += ")";
   }
   return out;
+}
+
+std::string Percent(double p) {
+  char b[32];
+  std::snprintf(b, sizeof b, p >= 0.9995 ? "%.1f %%" : "%.1f %%", 100.0 * p);
+  return b;
+}
+
+// The first screen: which effects are missing and how sure, each value with its σ in engineering
+// units, whether the model is then adequate to the test's noise, the look-alike readings the data
+// cannot separate (folded per member and point), and what to check.
+std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& model) {
+  const diagnose::Candidate& first = d.candidates.front();
+  std::vector<std::string> setups;
+  for (const auto& m : first.modes)
+    if (std::find(setups.begin(), setups.end(), m.setup) == setups.end()) setups.push_back(m.setup);
+  std::ostringstream out;
+  auto adequacy = [&](const diagnose::Candidate& c) {
+    out << "  " << (c.noise_consistent ? "Adequate to the test's noise: yes" : "Adequate to the test's noise: NO")
+        << " — reduced χ² " << Number(c.reduced_chi2, 3) << " over " << d.test_mode_count << " test modes"
+        << (c.noise_consistent ? " (what the measurement noise explains).\n"
+                               : " (1 would be noise alone): the model still misses something these data can see"
+                                 + std::string(c.effects.empty() ? "" : "; rank 1 is not the whole answer") + ".\n");
+  };
+  if (first.effects.empty()) {
+    out << "Diagnosis: no missing effect found (probability " << Percent(first.probability)
+        << "): no candidate explains the mismatch by more than its prior and parameter cost.\n";
+    out << "  Mean frequency error " << FixedPoint(first.mean_abs_frequency_error_pct, 2) << " %, mean MAC "
+        << FixedPoint(first.mean_mac, 3) << ".\n";
+    adequacy(first);
+  } else {
+    out << "Diagnosis: the model misses " << first.effects.size() << " effect" << (first.effects.size() > 1 ? "s" : "")
+        << " (rank 1, probability " << Percent(first.probability) << "):\n";
+    for (size_t i = 0; i < first.effects.size(); ++i) {
+      const model::Effect& e = first.effects[i];
+      diagnose::Candidate single = first;
+      single.effects = {e};
+      double p_exact = 0.0, p_wild = 0.0;
+      const std::string wildcard = diagnose::EffectWildcard(e.target);
+      for (const auto& ep : d.effect_probabilities) {
+        if (ep.kind == e.kind && ep.target == e.target) p_exact = ep.probability;
+        if (ep.kind == e.kind && ep.target == wildcard && wildcard != e.target) p_wild = ep.probability;
+      }
+      out << "  " << i + 1 << ". " << diagnose::DescribeCandidate(single) << " — " << Percent(p_exact)
+          << " over every candidate that holds it";
+      if (p_wild > 0.0) out << " (" << Percent(p_wild) << " for " << e.kind << " on any of " << wildcard << ")";
+      out << "\n";
+      std::vector<std::string> values;
+      for (const auto& p : first.parameters)
+        if (p.effect_kind == e.kind && p.target == e.target) values.push_back(ParameterWords(p, e));
+      std::string line;
+      for (const auto& v : values) line += (line.empty() ? "" : "; ") + v;
+      const std::string springs = SpringStiffnessWords(model, first.effects, e, setups);
+      if (!springs.empty()) line += (line.empty() ? "" : "; ") + springs;
+      if (!line.empty()) out << "     " << line << "\n";
+    }
+    out << "  Mean frequency error " << FixedPoint(d.baseline.mean_abs_frequency_error_pct, 2) << " % → "
+        << FixedPoint(first.mean_abs_frequency_error_pct, 2) << " %, mean MAC " << FixedPoint(d.baseline.mean_mac, 3)
+        << " → " << FixedPoint(first.mean_mac, 3) << ".\n";
+    adequacy(first);
+  }
+  // Look-alikes: the other readings within a factor 20 of rank 1's probability, one line per
+  // group of the same reading on other members or points.
+  std::vector<std::string> alike;
+  for (const diagnose::CandidateGroup& g : d.groups) {
+    const bool holds_first = std::find(g.ranks.begin(), g.ranks.end(), 1) != g.ranks.end();
+    const double p = holds_first ? g.probability - first.probability : g.probability;
+    const int others = static_cast<int>(g.ranks.size()) - (holds_first ? 1 : 0);
+    if (others <= 0 || g.kind == "none" || !(p >= 0.05 * first.probability) || !(p >= 0.001)) continue;
+    std::string text = g.kind + " on " + g.target;
+    if (others > 1 || holds_first) text += " (" + std::to_string(others) + (holds_first ? " other" : "") + " reading" + (others > 1 ? "s" : "") + ")";
+    alike.push_back(text + " " + Percent(p));
+    if (alike.size() == 4) break;
+  }
+  if (!first.effects.empty())
+    out << "  Look-alikes these data cannot separate: " << (alike.empty() ? std::string("none within a factor 20") : "")
+        << [&] {
+             std::string s;
+             for (size_t i = 0; i < alike.size(); ++i) s += (i ? "; " : "") + alike[i];
+             return s;
+           }()
+        << ".\n";
+  for (const auto& flag : first.flags) out << "  Check: " << flag << ".\n";
+  return out.str();
 }
 
 }  // namespace
@@ -119,6 +237,11 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
       "shape-sigma", po::value(&dopt.shape_sigma)->default_value(dopt.shape_sigma), "1σ of (1 - MAC)")(
       "shape-weight", po::value(&shape_weight), "old form of --shape-sigma: shape σ = 0.001 / weight")(
       "mac-min", po::value(&dopt.pairing.mac_min)->default_value(dopt.pairing.mac_min), "minimum MAC of a pair while fitting")(
+      "sensor-mass", po::value(&config.sensor_mass)->default_value(config.sensor_mass),
+      "kg of the transducer at each measured node (one triaxial accelerometer counts once): the test's own sensors, "
+      "carried by the model's prediction and never reported as a missing effect. Each roving set's sensors load the "
+      "article while that set was measured, when the `ema fit --json` file beside the modes (or MODES.json itself) "
+      "lists the sets; else every measured node carries its sensor throughout")(
       "force-level", po::value(&config.force_levels)->composing(),
       "modes fitted at one impact force level, as FORCE_N=MODES.unv; two or more flag amplitude-dependent "
       "stiffness");
@@ -143,6 +266,8 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
   }
   if (std::string bad; !dopt.IsValid(&bad)) throw UsageError(bad);
   if (config.force_levels.size() == 1) throw UsageError("--force-level needs at least two levels");
+  if (!(config.sensor_mass >= 0.0) || !std::isfinite(config.sensor_mass))
+    throw UsageError("--sensor-mass must be a mass in kg >= 0 (0.0112 for an 11.2 g accelerometer)");
 
   for (const std::string& t : tests) config.tests.push_back(SplitSetup(t));
   return config;
@@ -158,7 +283,9 @@ app::DiagnoseStageResult app::RunDiagnoseStage(const DiagnoseConfig& config, con
   json& json_out = stage.json;
   json_out = formats::DiagnosisJson(d, dopt);
   const diagnose::Candidate& first = d.candidates.front();
-  out << DiagnosisSummary(d) << "\n\n" << d.explanation
+  stage.summary = DiagnosisSummary(d, model);
+  json_out["summary"] = stage.summary;
+  out << stage.summary << "\n" << d.explanation
             << "\n\n| rank | candidate | parameters | probability | mean |Δf| [%] | mean MAC | score |\n"
             << "|---:|---|---|---:|---:|---:|---:|\n";
   int shown = 0;
@@ -227,7 +354,10 @@ int RunDiagnose(const std::vector<std::string>& args) {
     ModeSet modes = formats::ReadModeSet(path);
     if (modes.source.empty()) modes.source = path;
     app::AttachSidecarUncertainty(path, &modes);  // σ of each mode from `ema fit --json`, when beside it
-    sets.push_back({setup, std::move(modes)});
+    diagnose::SetupModes test{setup, std::move(modes)};
+    test.sensor_mass = config->sensor_mass;
+    if (test.sensor_mass > 0.0) app::ReadSidecarTestSets(path, test.modes, &test.roving_sets, &test.reference);
+    sets.push_back(std::move(test));
   }
   app::RunDiagnoseStage(*config, model, sets, std::cout);
   return 0;

@@ -117,6 +117,7 @@ app::FitStageResult app::RunFitStage(const FitConfig& config, const FrfSet& frfs
 
   fit.modes.source = input;
   stage.modes_json = formats::FitModesJson(fit, fit_options.refine);
+  stage.modes_json.update(formats::TestSetsJson(frfs));  // roving sets and hammer DOF, when known
   if (!config.stabilisation_path.empty()) {
     stage.stabilisation_json = formats::StabilisationJson(fit, fit_options.stability);
     AddModeIndicatorsJson(&stage.stabilisation_json, frfs, fit_options.data, input);  // CMIF/MMIF (docs/quality.md)

@@ -25,6 +25,7 @@
 #include "ema/core/text.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
+#include "ema/formats/json_codecs.hpp"
 #include "ema/formats/model_file.hpp"
 #include "ema/formats/project_file.hpp"
 #include "quality_json.hpp"
@@ -94,31 +95,6 @@ class StepRunner {
 // The summary's numbers: "-" where a value does not exist.
 std::string Fixed(double value, int digits) { return FixedPoint(value, digits, "-"); }
 
-double Get(const json& j, std::initializer_list<const char*> keys) {
-  const json* node = &j;
-  for (const char* key : keys) {
-    if (!node->is_object() || !node->contains(key)) return kNaN;
-    node = &(*node)[key];
-  }
-  return node->is_number() ? node->get<double>() : kNaN;
-}
-
-std::string ParametersText(const json& parameters) {
-  if (!parameters.is_object()) return "";
-  std::string out;
-  for (const auto& [key, value] : parameters.items()) {
-    if (!out.empty()) out += ", ";
-    out += key + " = ";
-    if (value.is_number()) {
-      char text[64];
-      std::snprintf(text, sizeof text, "%.4g", value.get<double>());
-      out += text;
-    } else {
-      out += value.dump();
-    }
-  }
-  return out;
-}
 
 // The report's "Data quality" section: the `ema quality` checks of the test's FRFs in the fit band.
 template <class Runner>
@@ -350,6 +326,16 @@ int RunRun(const std::vector<std::string>& args) {
         command += " --test " + (project.tests[t].setup.empty() ? std::string() : project.tests[t].setup + "=") +
                    TestFiles(out / project.tests[t].name).modes.string();
     command += " --json " + diagnosis_json.string() + " -o " + updated_model.string();
+    // The tests' own sensors ([[test]] sensor_mass): `ema diagnose --sensor-mass` gives one mass to
+    // every test, and finds each test's roving sets in the `ema fit --json` file beside its modes.
+    double sensor_mass = 0.0;
+    for (std::size_t t = 0; t < project.tests.size(); ++t)
+      if (results[t].fit) sensor_mass = std::max(sensor_mass, project.tests[t].sensor_mass);
+    if (sensor_mass > 0.0) {
+      char text[32];
+      std::snprintf(text, sizeof text, "%.17g", sensor_mass);
+      command += std::string(" --sensor-mass ") + text;
+    }
     if (!project.diagnose_extra.empty()) command += " " + Joined(project.diagnose_extra);
     runner.Run("diagnose", "diagnose", command, [&](std::ostream& log) {
       // [diagnose] args are `ema diagnose` options.
@@ -368,8 +354,15 @@ int RunRun(const std::vector<std::string>& args) {
         for (std::size_t m = 0; m < modes.modes.size() && m < fitted.modes.size(); ++m) {
           modes.modes[m].frequency_std_hz = fitted.modes[m].frequency_std_hz;
           modes.modes[m].damping_ratio_std = fitted.modes[m].damping_ratio_std;
+          modes.modes[m].set_frequency_hz = fitted.modes[m].set_frequency_hz;
+          modes.modes[m].set_damping_ratio = fitted.modes[m].set_damping_ratio;
+          modes.modes[m].set_frequency_std_hz = fitted.modes[m].set_frequency_std_hz;
         }
-        tests.push_back({project.tests[t].setup, std::move(modes)});
+        diagnose::SetupModes test{project.tests[t].setup, std::move(modes)};
+        test.sensor_mass = project.tests[t].sensor_mass;
+        if (test.sensor_mass > 0.0 && results[t].frfs)
+          formats::ReadTestSets(formats::TestSetsJson(*results[t].frfs), &test.roving_sets, &test.reference);
+        tests.push_back(std::move(test));
       }
       diagnosis = app::RunDiagnoseStage(*config, nominal_model(), tests, log);
     });
@@ -499,22 +492,10 @@ int RunRun(const std::vector<std::string>& args) {
     }
     input.setups.push_back(std::move(s));
   }
-  if (diagnosis_data.contains("candidates") && diagnosis_data["candidates"].is_array() && !diagnosis_data["candidates"].empty()) {
-    const double base = Get(diagnosis_data, {"baseline", "mean_abs_frequency_error_pct"});
-    int shown = 0;
-    for (const json& c : diagnosis_data["candidates"]) {
-      if (shown == 3) break;
-      const int rank = c.value("rank", shown + 1);
-      std::string text = "  " + std::string(rank == 1 ? "diagnosis: " : "           ") + "#" + std::to_string(rank) + " " +
-                         c.value("kind", std::string("?"));
-      if (c.contains("target") && c["target"].is_string()) text += " on '" + c["target"].get<std::string>() + "'";
-      const std::string params = ParametersText(c.value("parameters", json()));
-      if (!params.empty()) text += " (" + params + ")";
-      text += ": mean |f error| " + Fixed(base, 2) + " % -> " + Fixed(Get(c, {"mean_abs_frequency_error_pct"}), 2) + " %";
-      if (const double p = Get(c, {"probability"}); std::isfinite(p)) text += ", probability " + Fixed(100.0 * p, 1) + " %";
-      summary.push_back(text);
-      ++shown;
-    }
+  if (diagnosis) {
+    // The diagnosis's first screen (app::RunDiagnoseStage): what is missing, how sure, adequacy.
+    std::istringstream lines(diagnosis->summary);
+    for (std::string l; std::getline(lines, l);) summary.push_back("  " + l);
   }
   // The model's story over runs into this folder (history.json) and where rank 1 acts.
   app::RunRecord record;

@@ -114,12 +114,15 @@ struct DiagnoseConfig {
   std::vector<std::pair<std::string, std::string>> tests;  ///< (setup, modes file)
   std::vector<std::string> force_levels;                   ///< FORCE_N=MODES.unv
   diagnose::DiagnoseOptions options;
+  /// --sensor-mass: kg of the transducer at each measured node of every test (cli.md, added turn 3).
+  double sensor_mass = 0.0;
 };
 
 struct DiagnoseStageResult {
   diagnose::Diagnosis diagnosis;
   nlohmann::json json;               ///< `ema diagnose --json`
   model::Model updated;              ///< the model with rank 1's effects added (what -o holds)
+  std::string summary;               ///< the first screen: what is missing, how sure, adequacy, look-alikes
 };
 
 /// `require_inputs` false: only options (the `args` of a project file's [diagnose]).

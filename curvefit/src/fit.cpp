@@ -78,6 +78,119 @@ bool RefineSelected(const FitData& data, const FitOptions& options, const std::s
   return true;
 }
 
+// Roving-sensor tests: each roving set's FRFs refined with poles of their own, from the common
+// PolyMAX poles. Usable when every set's refinement is; the selection's poles become the mean
+// over the sets.
+struct PerSetRefinement {
+  bool ok = false;
+  std::vector<MlRefineResult> sets;
+  SetPoles poles;
+  std::string why;  ///< when not usable
+};
+
+PerSetRefinement RefinePerSet(const FitData& data, const FitOptions& options, const std::vector<SelectedPole>& selected) {
+  PerSetRefinement out;
+  const std::vector<std::vector<int>> sets = data.SetOutputs();
+  if (sets.size() < 2 || options.refine != RefineMethod::kMl || !options.per_set_poles) return out;
+  MlRefineOptions mo = options.ml;
+  mo.lower_residual = options.lsfd.lower_residual;
+  mo.upper_residual = options.lsfd.upper_residual;
+  for (size_t k = 0; k < sets.size(); ++k) {
+    MlRefineResult r;
+    try {
+      r = RefineModalModel(SubsetOutputs(data, sets[k]), selected, mo);
+    } catch (const InputError& e) {
+      out.why = "roving set " + std::to_string(k + 1) + ": " + e.what();
+      return out;
+    }
+    if (!r.summary.IsSolutionUsable()) {
+      out.why = "roving set " + std::to_string(k + 1) + ": " + r.summary.BriefReport();
+      return out;
+    }
+    out.poles.outputs.push_back(sets[k]);
+    out.poles.lambda_fitted.emplace_back();
+    for (const RefinedPole& p : r.poles) out.poles.lambda_fitted.back().push_back(p.lambda_fitted);
+    out.sets.push_back(std::move(r));
+  }
+  out.ok = true;
+  return out;
+}
+
+// The selection's poles as the mean of the sets' (frequency and damping averaged with equal
+// weights: what the diagnosis compares with the model's mean over the same sets), and the
+// refinement summary over the sets.
+void ApplyPerSet(const PerSetRefinement& per, FitResult* result) {
+  const double k = static_cast<double>(per.sets.size());
+  double chi2 = 0.0, initial = 0.0, final = 0.0;
+  int iterations = 0;
+  for (const auto& s : per.sets) {
+    chi2 = std::max(chi2, s.summary.reduced_chi2);
+    initial += s.summary.initial_cost;
+    final += s.summary.final_cost;
+    iterations = std::max(iterations, s.summary.iterations);
+  }
+  for (size_t r = 0; r < result->selected.size(); ++r) {
+    double f = 0.0, z = 0.0;
+    std::complex<double> fitted = 0.0;
+    for (const auto& s : per.sets) {
+      f += s.poles[r].frequency_hz / k;
+      z += s.poles[r].damping_ratio / k;
+      fitted += s.poles[r].lambda_fitted - s.poles[r].lambda;  // the window's damping
+    }
+    Pole& p = result->selected[r].pole;
+    p.frequency_hz = f;
+    p.damping_ratio = z;
+    p.lambda = FrequencyAndDampingToPole(f, z);
+    p.lambda_fitted = p.lambda + fitted / k;
+    // Participation: the rank-one part of the refined residues of every set (outputs × references),
+    // as the one-pole refinement does (RefineSelected).
+    const int m = static_cast<int>(p.participation.size());
+    if (m >= 2) {
+      Eigen::Index rows = 0;
+      for (const auto& s : per.sets) rows += s.residues.rows() / m;
+      Eigen::MatrixXcd rr(rows, m);
+      Eigen::Index row = 0;
+      for (const auto& s : per.sets)
+        for (Eigen::Index o = 0; o < s.residues.rows() / m; ++o, ++row)
+          for (int i = 0; i < m; ++i) rr(row, i) = s.residues(o * m + i, static_cast<Eigen::Index>(r));
+      Eigen::JacobiSVD<Eigen::MatrixXcd> svd(rr, Eigen::ComputeThinV);
+      if (svd.singularValues()[0] > 0.0) p.participation = svd.matrixV().col(0).conjugate();
+    }
+  }
+  MlRefineSummary& sum = result->refine;
+  sum = per.sets.front().summary;
+  sum.termination = RefineTermination::kConverged;
+  for (const auto& s : per.sets)
+    if (s.summary.termination == RefineTermination::kNoConvergence) sum.termination = RefineTermination::kNoConvergence;
+  sum.iterations = iterations;
+  sum.initial_cost = initial;
+  sum.final_cost = final;
+  sum.reduced_chi2 = chi2;
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << "each of " << per.sets.size() << " roving sets fitted with its own poles (largest reduced chi2 " << chi2 << ")";
+  sum.message = msg.str();
+}
+
+// Each mode's frequency and damping as every set saw it, and σ of their mean.
+void AttachSetFrequencies(const PerSetRefinement& per, LsfdResult& lsfd) {
+  const double k = static_cast<double>(per.sets.size());
+  for (size_t r = 0; r < lsfd.modes.modes.size(); ++r) {
+    Mode& mode = lsfd.modes.modes[r];
+    double var_f = 0.0, var_z = 0.0;
+    for (const auto& s : per.sets) {
+      const RefinedPole& p = s.poles[r];
+      mode.set_frequency_hz.push_back(p.frequency_hz);
+      mode.set_damping_ratio.push_back(p.damping_ratio);
+      mode.set_frequency_std_hz.push_back(p.frequency_std_hz);
+      var_f += p.frequency_std_hz * p.frequency_std_hz;
+      var_z += p.damping_ratio_std * p.damping_ratio_std;
+    }
+    mode.frequency_std_hz = std::sqrt(var_f) / k;
+    mode.damping_ratio_std = std::sqrt(var_z) / k;
+  }
+}
+
 // Frequency/damping sigma per mode; sigma of |shape| from the residues' sigma at the strongest
 // reference, scaled like the shape (first order; the scaling factor's own uncertainty neglected).
 void AttachUncertainty(const MlRefineResult& ml, LsfdResult& lsfd) {
@@ -213,9 +326,18 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
       for (;;) {
         const size_t warnings_before = result.warnings.size();
         MlRefineResult ml;
-        const bool have_ml = RefineSelected(data, options, source, &result, &ml);
+        const PerSetRefinement per = RefinePerSet(data, options, result.selected);
+        bool have_ml = false;
+        if (per.ok) {
+          ApplyPerSet(per, &result);
+        } else {
+          have_ml = RefineSelected(data, options, source, &result, &ml);
+          if (!per.why.empty() && result.refine.IsSolutionUsable())
+            result.warnings.push_back(source + ": one pole per mode for every roving set (" + per.why + ")");
+        }
         const double t_lsfd = ThreadCpuSeconds();
-        LsfdResult lsfd = EstimateModeShapes(data, result.selected, options.lsfd);
+        LsfdResult lsfd = EstimateModeShapes(data, result.selected, options.lsfd, per.ok ? &per.poles : nullptr);
+        if (per.ok) AttachSetFrequencies(per, lsfd);
         result.timing.lsfd += ThreadCpuSeconds() - t_lsfd;
         // Automatic selection only: a pole that is the same mode as a neighbour seen on other
         // outputs (roving-set inconsistency) is dropped and the model fitted again without it.

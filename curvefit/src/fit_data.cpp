@@ -1,5 +1,7 @@
 #include "ema/curvefit/fit_data.hpp"
 
+#include <map>
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -67,6 +69,7 @@ FitData PrepareFitData(const FrfSet& frfs, const FitDataOptions& options, const 
   d.transposed = frfs.roving_hammer || (options.auto_transpose && n_ref > n_out);
   d.outputs = d.transposed ? frfs.references : frfs.outputs;
   d.references = d.transposed ? frfs.outputs : frfs.references;
+  if (!d.transposed && frfs.output_sets.size() == frfs.outputs.size()) d.output_set = frfs.output_sets;
   d.frf_type = FrfTypeOf(frfs.output_quantity);
   d.window_decay_rate = frfs.window_decay_rate;
   d.line_spacing_hz = df;
@@ -171,6 +174,34 @@ FitData PrepareFitData(const FrfSet& frfs, const FitDataOptions& options, const 
     const double ss = d.h.middleCols(o * m, m).squaredNorm() / (used * m);
     d.output_weight[o] = ss > 0.0 ? 1.0 / std::sqrt(ss) : 0.0;
     if (ss <= 0.0) d.warnings.push_back(source + ": output " + DofName(d.outputs[o]) + " is zero in the band");
+  }
+  return d;
+}
+
+std::vector<std::vector<int>> FitData::SetOutputs() const {
+  std::map<int, std::vector<int>> sets;
+  if (output_set.size() != outputs.size()) return {};
+  for (size_t o = 0; o < outputs.size(); ++o) sets[output_set[o]].push_back(static_cast<int>(o));
+  std::vector<std::vector<int>> out;
+  for (auto& [id, list] : sets) out.push_back(std::move(list));
+  return out;
+}
+
+FitData SubsetOutputs(const FitData& data, const std::vector<int>& outputs) {
+  FitData d = data;
+  const int m = data.ReferenceCount(), l = static_cast<int>(outputs.size());
+  d.outputs.clear();
+  d.output_set.clear();
+  d.output_weight.resize(l);
+  d.h.resize(data.LineCount(), l * m);
+  if (data.noise_variance.size() > 0) d.noise_variance.resize(data.LineCount(), l * m);
+  for (int k = 0; k < l; ++k) {
+    const int o = outputs[static_cast<size_t>(k)];
+    d.outputs.push_back(data.outputs[static_cast<size_t>(o)]);
+    if (!data.output_set.empty()) d.output_set.push_back(data.output_set[static_cast<size_t>(o)]);
+    d.output_weight[k] = data.output_weight[o];
+    d.h.middleCols(k * m, m) = data.h.middleCols(o * m, m);
+    if (data.noise_variance.size() > 0) d.noise_variance.middleCols(k * m, m) = data.noise_variance.middleCols(o * m, m);
   }
   return d;
 }

@@ -13,7 +13,8 @@ namespace ema::curvefit {
 
 using cd = std::complex<double>;
 
-LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPole>& poles, const LsfdOptions& options) {
+LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPole>& poles, const LsfdOptions& options,
+                              const SetPoles* set_poles) {
   const int n = data.LineCount(), l = data.OutputCount(), m = data.ReferenceCount();
   const int nm = static_cast<int>(poles.size());
   const int n_res = (options.lower_residual ? m : 0) + (options.upper_residual ? m : 0);
@@ -23,8 +24,25 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
     throw InputError("lsfd", "too few valid lines (" + std::to_string(used) + ") for " + std::to_string(nm) + " modes");
   const int k_pow = data.frf_type == FrfType::kReceptance ? 0 : data.frf_type == FrfType::kMobility ? 1 : 2;
 
-  // Design matrix, rows (line, reference, re/im); identical for every output (no per-output
-  // weights), so one QR serves all outputs.
+  // Groups of outputs fitted with one set of poles: every output at once, or each roving set
+  // with its own (set_poles).
+  std::vector<std::vector<int>> groups;
+  std::vector<std::vector<cd>> group_poles;
+  if (set_poles) {
+    groups = set_poles->outputs;
+    group_poles = set_poles->lambda_fitted;
+  } else {
+    groups.emplace_back();
+    for (int o = 0; o < l; ++o) groups.back().push_back(o);
+    group_poles.emplace_back();
+    for (const auto& p : poles) group_poles.back().push_back(p.pole.lambda_fitted);
+  }
+  Eigen::MatrixXd X(n_unk, l);
+  double err2 = 0.0, ref2 = 0.0;
+  for (size_t g = 0; g < groups.size(); ++g) {
+  const std::vector<int>& outs = groups[g];
+  // Design matrix, rows (line, reference, re/im); identical for every output of the group (no
+  // per-output weights), so one QR serves them all.
   const int rows = 2 * n * m;
   Eigen::MatrixXd P = Eigen::MatrixXd::Zero(rows, n_unk);
   for (int f = 0; f < n; ++f) {
@@ -38,7 +56,7 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
         P(row + 1, col) = v.imag();
       };
       for (int r = 0; r < nm; ++r) {
-        const cd lam = poles[r].pole.lambda_fitted;
+        const cd lam = group_poles[g][static_cast<size_t>(r)];
         const cd li = poles[r].pole.participation.size() == m ? poles[r].pole.participation[i] : cd(1.0);
         const cd g1 = li / (jw - lam), g2 = std::conj(li) / (jw - std::conj(lam));
         put(2 * r, factor * (g1 + g2));                 // Re phi
@@ -53,13 +71,14 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
   Eigen::VectorXd scale = P.colwise().norm().transpose();
   for (int c = 0; c < n_unk; ++c) scale[c] = scale[c] > 0.0 ? 1.0 / scale[c] : 0.0;
   P = P * scale.asDiagonal();
-  Eigen::MatrixXd B(rows, l);
-  for (int o = 0; o < l; ++o)
+  const int lg = static_cast<int>(outs.size());
+  Eigen::MatrixXd B(rows, lg);
+  for (int k = 0; k < lg; ++k)
     for (int f = 0; f < n; ++f)
       for (int i = 0; i < m; ++i) {
-        const cd h = data.line_weight[f] == 0.0 ? cd(0.0) : data.H(f, o, i);
-        B(2 * (f * m + i), o) = h.real();
-        B(2 * (f * m + i) + 1, o) = h.imag();
+        const cd h = data.line_weight[f] == 0.0 ? cd(0.0) : data.H(f, outs[static_cast<size_t>(k)], i);
+        B(2 * (f * m + i), k) = h.real();
+        B(2 * (f * m + i) + 1, k) = h.imag();
       }
   // Normal equations of the column-scaled design (unit-norm columns keep cond(P^T P) modest);
   // QR when the Cholesky factor shows rank trouble.
@@ -67,14 +86,18 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
   gram.selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
   Eigen::LLT<Eigen::MatrixXd> llt(gram.selfadjointView<Eigen::Lower>());
   const Eigen::VectorXd diag = llt.matrixL().toDenseMatrix().diagonal();
-  Eigen::MatrixXd X;
+  Eigen::MatrixXd Xg;
   if (llt.info() == Eigen::Success && diag.minCoeff() > 1e-6 * diag.maxCoeff()) {
-    X = llt.solve(P.transpose() * B);
+    Xg = llt.solve(P.transpose() * B);
   } else {
-    X = Eigen::HouseholderQR<Eigen::MatrixXd>(P).solve(B);
+    Xg = Eigen::HouseholderQR<Eigen::MatrixXd>(P).solve(B);
   }
-  const double err = (P * X - B).norm(), ref = B.norm();
-  X = scale.asDiagonal() * X;
+  err2 += (P * Xg - B).squaredNorm();
+  ref2 += B.squaredNorm();
+  Xg = scale.asDiagonal() * Xg;
+  for (int k = 0; k < lg; ++k) X.col(outs[static_cast<size_t>(k)]) = Xg.col(k);
+  }
+  const double err = std::sqrt(err2), ref = std::sqrt(ref2);
 
   LsfdResult result;
   result.synthesis_error = ref > 0.0 ? err / ref : 0.0;
@@ -89,11 +112,20 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
     }
   ModeSet& set = result.modes;
   set.dofs = data.outputs;
-  // Driving points: output DOF equal to a reference DOF.
-  std::vector<std::pair<int, int>> driving;  // (output, reference)
+  // Driving points: an output on the node and axis of a reference. A reference named the other way
+  // round (hammer at 101-Z, sensor at 101+Z) is a driving point too, its FRF negated: `sign`.
+  struct Driving {
+    int o, i;
+    double sign;
+  };
+  std::vector<Driving> driving;
   for (int i = 0; i < m; ++i)
-    for (int o = 0; o < l; ++o)
-      if (data.outputs[o] == data.references[i]) driving.push_back({o, i});
+    for (int o = 0; o < l; ++o) {
+      const Dof& out = data.outputs[o];
+      const Dof& ref = data.references[i];
+      if (out.node == ref.node && out.direction != 0 && std::abs(out.direction) == std::abs(ref.direction))
+        driving.push_back({o, i, (out.direction > 0) == (ref.direction > 0) ? 1.0 : -1.0});
+    }
 
   for (int r = 0; r < nm; ++r) {
     const Pole& pole = poles[r].pole;
@@ -115,10 +147,10 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
       // psi_hat = c phi is modal-A scaled and sqrt(2 j w_d) psi_hat has unit modal mass.
       cd c2 = 0.0;
       double wsum = 0.0;
-      for (auto [o, i] : driving) {
+      for (auto [o, i, sign] : driving) {
         if (std::abs(phi[o]) == 0.0) continue;
         const double w = std::abs(lr[i] * phi[o]);
-        c2 += w * lr[i] / phi[o];
+        c2 += w * sign * lr[i] / phi[o];
         wsum += w;
       }
       // A driving-point receptance residue is phi_d^2/(2j w_d m) with m > 0: negative imaginary.
@@ -127,9 +159,9 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
       // (residue >= 10 % of the largest driving-point residue) count: at a node of the mode the
       // residue is noise and its sign means nothing.
       double largest_driving = 0.0;
-      for (auto [o, i] : driving) largest_driving = std::max(largest_driving, std::abs(phi[o] * lr[i]));
-      for (auto [o, i] : driving)
-        if ((phi[o] * lr[i]).imag() > 0.0 && std::abs(phi[o] * lr[i]) >= 0.1 * largest_driving) {
+      for (auto [o, i, sign] : driving) largest_driving = std::max(largest_driving, std::abs(phi[o] * lr[i]));
+      for (auto [o, i, sign] : driving)
+        if ((sign * phi[o] * lr[i]).imag() > 0.0 && std::abs(phi[o] * lr[i]) >= 0.1 * largest_driving) {
           std::ostringstream msg;
           msg << "mode at " << pole.frequency_hz << " Hz: driving point " << DofName(data.outputs[o])
               << " has a residue of the sign of a negative modal mass (inverted sensor or hammer sign?);"

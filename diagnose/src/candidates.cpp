@@ -25,14 +25,20 @@ double TotalMass(const model::Model& m) {
   for (const auto& b : m.bodies) total += b.mass;
   for (const auto& p : m.masses) total += p.mass;
   if (!m.fe.Empty()) {
-    // FE: the translational mass of the matrices, from the direction that carries the most
-    // (the diagonal sum of its rows; a lumped matrix gives the mass exactly, a consistent one
-    // about 3/4 of it).
+    // FE: the kinetic energy of a unit rigid translation, rᵀ M r with r = 1 on every DOF of one
+    // direction — the mass exactly, for lumped and consistent matrices alike ([fe] and parts),
+    // from the direction that carries the most.
     double per_direction[3] = {0.0, 0.0, 0.0};
-    for (size_t i = 0; i < m.fe.dofs.size(); ++i)
-      if (m.fe.dofs[i].dof <= 3)
-        per_direction[m.fe.dofs[i].dof - 1] +=
-            m.fe.mass.coeff(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
+    auto add = [&](const Eigen::SparseMatrix<double>& a, double factor) {
+      for (int c = 0; c < a.outerSize(); ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it) {
+          const int dr = m.fe.dofs[static_cast<size_t>(it.row())].dof, dc = m.fe.dofs[static_cast<size_t>(it.col())].dof;
+          if (dr == dc && dr <= 3) per_direction[dr - 1] += factor * it.value();
+        }
+    };
+    add(m.fe.mass, 1.0);
+    for (const auto& part : m.fe.parts)
+      if (part.mass) add(*part.mass, part.mass_factor);
     total += std::max({per_direction[0], per_direction[1], per_direction[2]});
   }
   return total > 0.0 ? total : 1.0;
@@ -71,6 +77,12 @@ Atom MakeAtom(const model::Model& m, EffectKind kind, const std::string& target,
   Atom a;
   a.info = &info;
   a.effect = model::Effect{info.name, target, {}, std::nullopt, 0};
+  const auto slash = target.find('/');
+  if (info.target == model::EffectTarget::kPoints) a.words = target == "all_points" ? "all points" : "point " + target.substr(7);
+  else if (info.target == model::EffectTarget::kBody) a.words = "body '" + target + "'";
+  else if (slash != std::string::npos)
+    a.words = "member '" + target.substr(slash + 1) + "' of group '" + target.substr(0, slash) + "'";
+  else a.words = "group '" + target + "'";
   a.spec = {info.parameter, ref, 1.0, true, std::log(info.range_low), std::log(info.range_high), info.absent_end};
   a.prior.shape = info.prior_shape;
   a.prior.sigma = PriorSigma(m, kind, item_sigma);
@@ -204,6 +216,54 @@ std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& op
       o.member = set.member;
       o.group = set.group;
       atoms.push_back(o);
+    }
+  }
+  // FE parts (model-format.md "FE models built from parts"): each part group and each part in no
+  // group, then (with members) each member of a group of ≥ 2: stiffness_scale, and mass_scale
+  // where the parts carry mass (groups and lone parts only).
+  {
+    const auto& parts = base.fe.parts;
+    std::vector<std::string> part_targets;
+    for (const auto& p : parts) {
+      const std::string t = p.group.empty() ? p.name : p.group;
+      if (std::find(part_targets.begin(), part_targets.end(), t) == part_targets.end()) part_targets.push_back(t);
+    }
+    auto add_part_atoms = [&](const std::string& target, const std::string& group, bool member) {
+      double sigma = kNaN;
+      bool stiffness = false, mass = false;
+      for (int i : model::TargetParts(base, target)) {
+        const auto& p = parts[static_cast<size_t>(i)];
+        if (std::isfinite(p.uncertainty)) sigma = std::isfinite(sigma) ? std::max(sigma, p.uncertainty) : p.uncertainty;
+        stiffness |= p.HasStiffness();
+        mass |= p.HasMass();
+      }
+      const auto slash = target.find('/');
+      const std::string words = slash != std::string::npos
+                                    ? "member '" + target.substr(slash + 1) + "' of part group '" + group + "'"
+                                    : (parts[static_cast<size_t>(model::TargetParts(base, target).front())].group.empty()
+                                           ? "part '" + target + "'"
+                                           : "part group '" + target + "'");
+      if (stiffness) {
+        Atom a = MakeAtom(base, EffectKind::kStiffnessScale, target, 1.0, sigma);
+        a.words = words;
+        a.member = member;
+        a.group = group;
+        a.part = true;
+        atoms.push_back(a);
+      }
+      if (mass && !member) {
+        Atom a = MakeAtom(base, EffectKind::kMassScale, target, 1.0, kNaN);
+        a.words = words;
+        a.group = group;
+        a.part = true;
+        atoms.push_back(a);
+      }
+    };
+    for (const std::string& t : part_targets) {
+      add_part_atoms(t, t, false);
+      const std::vector<int> of_group = model::TargetParts(base, t);
+      if (options.members && of_group.size() >= 2 && !parts[static_cast<size_t>(of_group.front())].group.empty())
+        for (int i : of_group) add_part_atoms(parts[static_cast<size_t>(i)].Target(), t, true);
     }
   }
   // Points: all together, then (with members) one by one.

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -22,6 +23,8 @@ bool DiagnoseOptions::IsValid(std::string* error) const {
   else if (max_effects < 1 || max_effects > 3) why = "max_effects must be 1, 2 or 3, got " + std::to_string(max_effects);
   else if (beam < 1 || additions < 1) why = "beam and additions must be >= 1";
   else if (max_fitted_singles < 0) why = "max_fitted_singles must be >= 0";
+  else if (reduced_model_min_dofs < 0) why = "reduced_model_min_dofs must be >= 0 (0: always full solves)";
+  else if (exact_candidates < 1) why = "exact_candidates must be >= 1";
   if (error) *error = why;
   return why.empty();
 }
@@ -106,9 +109,64 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
       s.half_power_hz(i) = 2.0 * zeta * m.frequency_hz;
     }
     s.model_dof_count = sol.modes.dofs.size();
+    // The test's own sensors: one set of point masses per roving set (all measured nodes at once
+    // when the sets are not known).
+    if (t.sensor_mass > 0.0) {
+      std::vector<std::vector<int>> sets = t.roving_sets;
+      if (sets.empty()) {
+        std::set<int> nodes;
+        for (const Dof& d : t.modes.dofs) nodes.insert(d.node);
+        sets.push_back({nodes.begin(), nodes.end()});
+      }
+      std::map<int, const model::TestPoint*> points;
+      for (const auto& p : base.points) points[p.id] = &p;
+      s.set_of_dof.assign(sol.modes.dofs.size(), -1);
+      for (size_t k = 0; k < sets.size(); ++k) {
+        std::vector<model::PointMass> sensors;
+        std::set<int> in_set;
+        for (int node : sets[k]) {
+          const auto it = points.find(node);
+          if (it == points.end() || !in_set.insert(node).second) continue;
+          sensors.push_back({"sensor@" + std::to_string(node), it->second->where, t.sensor_mass, it->second->line});
+        }
+        int measured = 0;
+        for (size_t d = 0; d < sol.modes.dofs.size(); ++d)
+          if (in_set.count(sol.modes.dofs[d].node) && s.set_of_dof[d] < 0) s.set_of_dof[d] = static_cast<int>(k), ++measured;
+        s.sensors.push_back(std::move(sensors));
+        s.set_weight.push_back(std::max(1, measured));
+      }
+      s.equal_set_weights = true;
+      for (const Mode& m : t.modes.modes)
+        if (m.set_frequency_hz.size() != sets.size()) s.equal_set_weights = false;
+      for (size_t d = 0; d < sol.modes.dofs.size(); ++d)
+        if (t.reference.node > 0 && sol.modes.dofs[d].node == t.reference.node &&
+            sol.modes.dofs[d].direction == std::abs(t.reference.direction))
+          s.reference_row = static_cast<int>(d);
+    }
     setups.push_back(std::move(s));
   }
   return setups;
+}
+
+// FE-sized models are searched through reduced models: the best fits are re-fitted on a basis
+// centred at their values (a full solve there) and their misfit, what is reported and ranked,
+// comes from full solves.
+void Polish(detail::Problem* p, std::vector<detail::Fit>* fits, const DiagnoseOptions& options) {
+  if (!p->Reduced()) return;
+  std::vector<size_t> order;
+  for (size_t i = 0; i < fits->size(); ++i)
+    if ((*fits)[i].ok && !(*fits)[i].atoms.empty()) order.push_back(i);
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return (*fits)[a].score < (*fits)[b].score; });
+  if (static_cast<int>(order.size()) > options.exact_candidates) order.resize(options.exact_candidates);
+  for (size_t i : order) {
+    detail::Fit& f = (*fits)[i];
+    ReportProgress(options.progress, 0.95, "checking " + std::to_string(f.atoms.size()) + " effect(s) with full solves");
+    p->Recentre(f.atoms, f.theta);
+    detail::Fit refit = detail::FitSet(p, f.atoms, f.theta, options);
+    if (!refit.ok) continue;
+    refit = detail::Assess(p, refit.atoms, refit.theta, options, true);
+    if (refit.ok) f = std::move(refit);
+  }
 }
 
 // The error falling as rank 1's effects are added one at a time, in the order of their single
@@ -129,7 +187,8 @@ std::vector<Step> Steps(detail::Problem* p, const std::vector<detail::Fit>& fits
     set.push_back(a);
     std::vector<int> sorted = set;
     std::sort(sorted.begin(), sorted.end());
-    const detail::Fit f = detail::FitSubset(p, fits, sorted, options);
+    detail::Fit f = detail::FitSubset(p, fits, sorted, options);
+    if (f.ok && !f.exact) f = detail::Assess(p, f.atoms, f.theta, options, true);
     if (!f.ok) break;
     steps.push_back({p->Atoms()[a].Label(), f.eval->mean_abs_frequency_error_pct, f.eval->mean_mac,
                      f.eval->mean_agreement_pct});
@@ -155,7 +214,7 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
   result.test_mode_count = result.residual_count / 2;
 
   // Stage 1: candidates.
-  const std::vector<detail::Atom> atoms = detail::BuildAtoms(base, options);
+  std::vector<detail::Atom> atoms = detail::BuildAtoms(base, options);
   detail::Problem problem(&evaluator, &atoms);
 
   // Baseline ("none").
@@ -173,6 +232,7 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
   // Stages 2–4: screening, fits, combinations.
   detail::SearchResult search = detail::Search(&problem, options);
   result.candidates_screened = search.screened;
+  Polish(&problem, &search.fits, options);
 
   // Stage 5: ranking.
   std::vector<Candidate> all;
@@ -182,6 +242,7 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
   for (const Candidate& c : all)
     if (c.kind == "none") result.baseline = c;
   result.effect_probabilities = EffectProbabilities(all);
+  result.groups = GroupCandidates(all);
 
   // Stage 6: explanation, and the error falling as rank 1's effects are added.
   result.explanation = detail::Explain(all, result.baseline);

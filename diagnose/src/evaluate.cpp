@@ -8,6 +8,7 @@
 #include "ema/core/error.hpp"
 #include "ema/correlation/correlate.hpp"
 #include "ema/correlation/mac.hpp"
+#include "ema/model/reduced.hpp"
 #include "ema/model/solve.hpp"
 #include "internal.hpp"
 
@@ -55,26 +56,152 @@ double RobustCost(const Eigen::VectorXd& r, double a) {
   return cost;
 }
 
+// The reduced models of an FE-sized model: one factory per setup and centre (a full solve and a
+// factorisation each), one reduced model per set of probes.
+struct Evaluator::Reduced {
+  model::Model skeleton;  // the base without its [fe] matrices: effects are applied to copies of it
+  std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModelFactory>> factories;
+  std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModel>> models;
+};
+
 Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options,
                      int max_modes)
     : base_(base), setups_(std::move(setups)), options_(options), max_modes_(max_modes) {
   for (const auto& s : setups_) residual_count_ += 2 * static_cast<int>(s.test_hz.size());
+  int dofs = 6 * static_cast<int>(base.bodies.size()) + base.fe.Size();
+  reduced_ = options.reduced_model_min_dofs > 0 && dofs >= options.reduced_model_min_dofs;
+  if (reduced_) {
+    reduced_models_ = std::make_unique<Reduced>();
+    reduced_models_->skeleton = base;
+    reduced_models_->skeleton.fe.mass.resize(0, 0);
+    reduced_models_->skeleton.fe.stiffness.resize(0, 0);
+  }
 }
 
+Evaluator::~Evaluator() = default;
+
 Evaluation Evaluator::Evaluate(const std::vector<model::Effect>& effects) {
+  model::Model m;
+  try {
+    m = base_;
+    for (const auto& e : effects) m = model::ApplyEffect(m, e);
+  } catch (const std::exception& e) {
+    Evaluation out;
+    out.error = e.what();
+    return out;
+  }
+  return Compare([&](std::size_t s, const std::vector<model::PointMass>& sensors) {
+    model::SolveOptions so;
+    so.setup = setups_[s].name;
+    so.max_modes = max_modes_;
+    so.extra_masses = sensors;
+    ++solves_;
+    return model::Solve(m, so);
+  });
+}
+
+Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<std::vector<model::Effect>>& probes,
+                                      const std::vector<model::Effect>& centre,
+                                      const std::vector<model::Effect>& effects) {
+  Reduced& r = *reduced_models_;
+  std::string centre_key;
+  for (const auto& e : centre) centre_key += model::Describe(e) + ";";
+  model::Model changed;
+  try {
+    changed = r.skeleton;
+    for (const auto& e : effects) changed = model::ApplyEffect(changed, e);
+  } catch (const std::exception& e) {
+    Evaluation out;
+    out.error = e.what();
+    return out;
+  }
+  const int test_modes = residual_count_ / 2;
+  return Compare([&](std::size_t s, const std::vector<model::PointMass>& sensors) {
+    model::SolveOptions so;
+    so.setup = setups_[s].name;
+    so.max_modes = max_modes_;
+    auto& factory = r.factories[{s, centre_key}];
+    if (!factory) {
+      model::Model centred = base_;
+      for (const auto& e : centre) centred = model::ApplyEffect(centred, e);
+      model::ReducedModelOptions ro;
+      ro.modes = max_modes_ + 10;
+      ro.enriched_modes = std::min(max_modes_, test_modes + 4);
+      factory = std::make_unique<model::ReducedModelFactory>(centred, so, ro);
+      ++solves_;
+    }
+    auto& reduced = r.models[{s, centre_key + "|" + key}];
+    if (!reduced) reduced = factory->Make(probes);
+    ++reduced_solves_;
+    so.extra_masses = sensors;
+    return reduced->Solve(changed, so);
+  });
+}
+
+model::Solution AsTested(const SetupData& s, const std::vector<model::Solution>& per_set) {
+  model::Solution out = per_set.front();
+  if (per_set.size() == 1) return out;
+  const auto& base = per_set.front().modes;
+  // A set's weight in a mode's frequency: the energy of its measured responses, Σ |φ_i|² over its
+  // DOFs — a least-squares fit of all FRFs at once weighs each set by how much of the mode it sees.
+  auto energy = [&](const Eigen::VectorXcd& shape, size_t k) {
+    if (s.equal_set_weights) return 1.0;
+    double e = 0.0;
+    for (Eigen::Index d = 0; d < shape.size(); ++d)
+      if (s.set_of_dof[static_cast<size_t>(d)] == static_cast<int>(k)) e += std::norm(shape(d));
+    return e;
+  };
+  for (size_t j = 0; j < base.modes.size(); ++j) {
+    const Eigen::VectorXcd& b = base.modes[j].shape;
+    double weight = energy(b, 0), frequency = weight * base.modes[j].frequency_hz;
+    Eigen::VectorXcd shape = b;
+    for (size_t k = 1; k < per_set.size(); ++k) {
+      const auto& modes = per_set[k].modes.modes;
+      // The same mode in set k: the most similar shape among the modes within 20 % in frequency
+      // (small sensor masses neither reorder nor reshape modes much, close pairs aside).
+      int match = -1;
+      double best = -1.0;
+      for (size_t m = 0; m < modes.size(); ++m) {
+        if (std::abs(modes[m].frequency_hz - base.modes[j].frequency_hz) > 0.2 * base.modes[j].frequency_hz) continue;
+        const double mac = std::norm(b.dot(modes[m].shape)) / (b.squaredNorm() * modes[m].shape.squaredNorm());
+        if (mac > best) best = mac, match = static_cast<int>(m);
+      }
+      if (match < 0) continue;
+      const Eigen::VectorXcd& p = modes[static_cast<size_t>(match)].shape;
+      // The test's shapes are residues φ_i φ_ref stitched through the hammer DOF: scale set k's
+      // values by its φ_ref over the first set's; without a usable reference, align the sign.
+      std::complex<double> scale = std::real(b.dot(p)) < 0.0 ? -1.0 : 1.0;
+      if (s.reference_row >= 0 && std::abs(b(s.reference_row)) > 1e-9 * b.cwiseAbs().maxCoeff())
+        scale = p(s.reference_row) / b(s.reference_row);
+      for (Eigen::Index d = 0; d < shape.size(); ++d)
+        if (s.set_of_dof[static_cast<size_t>(d)] == static_cast<int>(k)) shape(d) = p(d) * scale;
+      const double w = energy(p, k);
+      weight += w;
+      frequency += w * modes[static_cast<size_t>(match)].frequency_hz;
+    }
+    if (weight > 0.0) out.modes.modes[j].frequency_hz = frequency / weight;
+    out.modes.modes[j].shape = shape;
+  }
+  return out;
+}
+
+Evaluation Evaluator::Compare(
+    const std::function<model::Solution(std::size_t setup, const std::vector<model::PointMass>&)>& solve) {
   Evaluation out;
   out.r.resize(residual_count_);
   try {
-    model::Model m = base_;
-    for (const auto& e : effects) m = model::ApplyEffect(m, e);
     int row = 0;
     double sum_err = 0.0, sum_mac = 0.0, sum_agreement = 0.0;
-    for (const SetupData& s : setups_) {
-      model::SolveOptions so;
-      so.setup = s.name;
-      so.max_modes = max_modes_;
-      const model::Solution sol = model::Solve(m, so);
-      ++solves_;
+    for (std::size_t index = 0; index < setups_.size(); ++index) {
+      const SetupData& s = setups_[index];
+      model::Solution sol;
+      if (s.sensors.empty()) {
+        sol = solve(index, {});
+      } else {
+        std::vector<model::Solution> per_set;
+        for (const auto& sensors : s.sensors) per_set.push_back(solve(index, sensors));
+        sol = AsTested(s, per_set);
+      }
       if (sol.modes.dofs.size() != s.model_dof_count)
         throw InputError(base_.origin, "the model's observed DOFs changed while fitting");
       if (sol.modes.modes.empty()) throw InputError(base_.origin, "the model has no elastic mode");
@@ -90,6 +217,7 @@ Evaluation Evaluator::Evaluate(const std::vector<model::Effect>& effects) {
         c.setup = s.name;
         c.test_mode = static_cast<int>(i);
         c.test_frequency_hz = s.test_hz(i);
+        c.sigma_hz = s.sigma_hz(i);
         const int j = partner[i];
         if (j >= 0) {
           c.model_mode = j;
@@ -108,6 +236,8 @@ Evaluation Evaluator::Evaluate(const std::vector<model::Effect>& effects) {
           out.r(row) = options_.unpaired_frequency_residual * s.test_hz(i) / s.sigma_hz(i);
           out.r(row + 1) = 1.0 / s.sigma_shape(i);
         }
+        c.frequency_misfit_sigma = out.r(row);
+        c.shape_misfit_sigma = out.r(row + 1);
         row += 2;
         out.modes.push_back(c);
       }

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <set>
 #include <sstream>
 
@@ -45,6 +46,10 @@ bool Nested(const Candidate& a, const Candidate& b) {
   return contains(a, b) || contains(b, a);
 }
 
+// "the stiffness of member 'J3' of group 'joints' is 50× lower than modelled (7.8σ of its stated
+// uncertainty of 50 %): check it".
+std::string OutsidePriorWords(const Atom& atom, const FittedParameter& p);
+
 }  // namespace
 
 std::string FormatNumber(double v, int significant) {
@@ -58,6 +63,43 @@ std::string Join(const std::vector<std::string>& parts, const std::string& sep) 
   for (size_t i = 0; i < parts.size(); ++i) out += (i ? sep : "") + parts[i];
   return out;
 }
+
+namespace {
+
+std::string OutsidePriorWords(const Atom& atom, const FittedParameter& p) {
+  const std::string& what = atom.words;
+  auto times = [](double ratio) {
+    return ratio >= 1.0 ? FormatNumber(ratio, 2) + "× higher" : FormatNumber(1.0 / ratio, 2) + "× lower";
+  };
+  std::string sentence;
+  switch (atom.info->kind) {
+    case model::EffectKind::kStiffnessScale:
+      sentence = "the stiffness of " + what + " is " + times(p.value) + " than modelled";
+      break;
+    case model::EffectKind::kMassScale:
+      sentence = "the mass of " + what + " is " + times(p.value) + " than modelled";
+      break;
+    case model::EffectKind::kSeriesCompliance:
+      sentence = "a compliance of " + FormatNumber(p.value / 1e6, 3) + " N/µm in series with " + what + " is " +
+                 times(p.value / atom.spec.ref) + " than the interface itself";
+      break;
+    case model::EffectKind::kOperatingPoint:
+      sentence = "the operating point of " + what + " is " + times(p.value / atom.spec.ref) + " than the nominal one";
+      break;
+    case model::EffectKind::kAddedMass:
+      sentence = "an unmodelled mass of " + FormatNumber(p.value * 1e3, 3) + " g per point at " + what +
+                 " is far more than expected";
+      break;
+    case model::EffectKind::kGroundSpring:
+      sentence = "the support of " + what + " (" + FormatNumber(p.value / 1e6, 3) +
+                 " N/µm to ground) is far from fixed or free as modelled";
+      break;
+  }
+  return sentence + " (" + FormatNumber(std::abs(p.prior_z), 2) + "σ of its stated uncertainty of " +
+         FormatNumber(100.0 * p.prior_sigma, 2) + " %): check it";
+}
+
+}  // namespace
 
 Candidate MakeCandidate(Problem* p, const Fit& f, double baseline_cost) {
   Candidate c;
@@ -88,6 +130,17 @@ Candidate MakeCandidate(Problem* p, const Fit& f, double baseline_cost) {
   c.log_evidence = f.log_evidence;
   c.score = f.score;
   c.explained_pct = baseline_cost > 0.0 ? 100.0 * (1.0 - c.cost / baseline_cost) : 0.0;
+  c.reduced_model = !f.exact;
+  {
+    // Reduced χ² of the frequencies (cli.md): the even residuals are the frequency errors in σ.
+    double chi2 = 0.0;
+    int modes = 0;
+    for (Eigen::Index i = 0; i + 1 < e.r.size(); i += 2, ++modes) chi2 += e.r(i) * e.r(i);
+    const int dof = std::max(1, modes - static_cast<int>(f.atoms.size()));
+    c.reduced_chi2 = chi2 / dof;
+    c.noise_consistent =
+        std::isfinite(chi2) && chi2 <= boost::math::quantile(boost::math::chi_squared(static_cast<double>(dof)), 0.99);
+  }
   for (size_t i = 0; i < f.atoms.size(); ++i) {
     const Atom& atom = atoms[f.atoms[i]];
     const ParamSpec& s = atom.spec;
@@ -104,6 +157,10 @@ Candidate MakeCandidate(Problem* p, const Fit& f, double baseline_cost) {
     fp.upper = s.Value(s.hi);
     const int end = BoundEnd(s, f.theta[i]);
     fp.at_bound = end != 0;
+    fp.prior_z = atom.prior.shape == model::PriorShape::kLogNormal ? (f.theta[i] - atom.prior.centre) / atom.prior.sigma
+                                                                     : fp.value / atom.prior.sigma;
+    fp.outside_prior = std::abs(fp.prior_z) > 3.0;
+    if (fp.outside_prior) c.flags.push_back(OutsidePriorWords(atom, fp));
     // Sitting on the "absent" end just means the effect is not wanted; the other end means the
     // fit wants an unphysical value.
     if (end != 0 && end != s.absent_end) c.plausible = false;
@@ -123,12 +180,12 @@ void Rank(std::vector<Candidate>* all, const Candidate& none) {
     sum += c.probability;
   }
   for (Candidate& c : *all) c.probability = sum > 0.0 ? c.probability / sum : 0.0;
-  // Plausible candidates by score (with "none"), then implausible ones, then failures.
+  // By the posterior (with "none"), failures last. A value far outside its prior stays a
+  // candidate ranked by its evidence (the prior already weighs it) and is flagged in words.
   std::stable_sort(all->begin(), all->end(), [](const Candidate& a, const Candidate& b) {
-    const int ca = !a.error.empty() ? 2 : (a.plausible ? 0 : 1);
-    const int cb = !b.error.empty() ? 2 : (b.plausible ? 0 : 1);
-    if (ca != cb) return ca < cb;
-    if (ca == 2) return false;
+    const bool fa = !a.error.empty() || !std::isfinite(a.score), fb = !b.error.empty() || !std::isfinite(b.score);
+    if (fa != fb) return fb;
+    if (fa) return false;
     return a.score < b.score;
   });
   for (size_t i = 0; i < all->size(); ++i) (*all)[i].rank = static_cast<int>(i) + 1;
@@ -233,6 +290,24 @@ std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>&
     return a.probability > b.probability;
   });
   return out;
+}
+
+std::vector<CandidateGroup> GroupCandidates(const std::vector<Candidate>& ranked) {
+  std::vector<CandidateGroup> groups;
+  std::map<std::string, size_t> index;
+  for (const Candidate& c : ranked) {
+    if (!c.error.empty()) continue;
+    std::vector<std::string> targets;
+    for (const model::Effect& e : c.effects) targets.push_back(EffectWildcard(e.target));
+    const std::string target = Join(targets, "+");
+    const std::string key = c.kind + "|" + target;
+    auto [it, fresh] = index.emplace(key, groups.size());
+    if (fresh) groups.push_back({c.kind, target, {}, 0.0});
+    CandidateGroup& g = groups[it->second];
+    g.ranks.push_back(c.rank);
+    g.probability += std::isfinite(c.probability) ? c.probability : 0.0;
+  }
+  return groups;
 }
 
 std::string DescribeCandidate(const Candidate& c) {

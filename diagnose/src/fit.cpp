@@ -7,6 +7,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <functional>
 
 #include "internal.hpp"
 
@@ -46,13 +47,50 @@ struct PriorBlock {
 
 }  // namespace
 
-std::shared_ptr<const Evaluation> Problem::At(const std::vector<int>& set, const std::vector<double>& theta) {
-  for (const auto& [key, value] : cache_)
-    if (key.first == set && key.second == theta) return value;
-  auto value = std::make_shared<const Evaluation>(evaluator_->Evaluate(Effects(set, theta)));
-  cache_.emplace_back(std::make_pair(set, theta), value);
-  if (cache_.size() > 24) cache_.pop_front();
+std::shared_ptr<const Evaluation> Problem::Cached(std::deque<std::pair<Key, std::shared_ptr<const Evaluation>>>* cache,
+                                                  const Key& key, const std::function<Evaluation()>& evaluate) {
+  for (const auto& [k, value] : *cache)
+    if (k == key) return value;
+  auto value = std::make_shared<const Evaluation>(evaluate());
+  cache->emplace_back(key, value);
+  if (cache->size() > 24) cache->pop_front();
   return value;
+}
+
+std::shared_ptr<const Evaluation> Problem::At(const std::vector<int>& set, const std::vector<double>& theta) {
+  if (set.empty() || !evaluator_->UsesReducedModels()) return Exact(set, theta);
+  return Cached(&cache_, {set, theta}, [&] {
+    // The reduced model of this set: its probes are its atoms, each at a value that changes the
+    // model (linear effects give one direction whatever the value; the others near the centre).
+    const auto centre = centres_.find(set);
+    std::vector<std::vector<model::Effect>> probes;
+    std::string key;
+    for (size_t k = 0; k < set.size(); ++k) {
+      const Atom& a = (*atoms_)[set[k]];
+      const double at = centre != centres_.end() ? centre->second[k] - 0.5 : (a.spec.absent_end == 0 ? -0.5 : 0.0);
+      probes.push_back({a.With(at)});
+      key += std::to_string(set[k]) + ",";
+    }
+    const std::vector<model::Effect> centred =
+        centre != centres_.end() ? Effects(set, centre->second) : std::vector<model::Effect>{};
+    return evaluator_->EvaluateReduced(key, probes, centred, Effects(set, theta));
+  });
+}
+
+std::shared_ptr<const Evaluation> Problem::Exact(const std::vector<int>& set, const std::vector<double>& theta) {
+  return Cached(&exact_cache_, {set, theta}, [&] { return evaluator_->Evaluate(Effects(set, theta)); });
+}
+
+void Problem::Widen(int atom, int end) {
+  ParamSpec& s = (*atoms_)[static_cast<size_t>(atom)].spec;
+  const double step = s.log ? std::log(1000.0) : s.hi - s.lo;
+  if (end < 0) s.lo -= step;
+  else s.hi += step;
+}
+
+void Problem::Recentre(const std::vector<int>& set, const std::vector<double>& theta) {
+  centres_[set] = theta;
+  std::erase_if(cache_, [&](const auto& entry) { return entry.first.first == set; });
 }
 
 std::vector<model::Effect> Problem::Effects(const std::vector<int>& set, const std::vector<double>& theta) const {
@@ -84,17 +122,23 @@ double Problem::Objective(const std::vector<int>& set, const std::vector<double>
 }
 
 Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<double>& theta,
-           const DiagnoseOptions& options) {
+           const DiagnoseOptions& options, bool exact) {
   Fit f;
   f.atoms = set;
   f.theta = theta;
-  f.eval = problem->At(set, theta);
+  f.exact = exact || !problem->Reduced() || set.empty();
+  f.eval = exact ? problem->Exact(set, theta) : problem->At(set, theta);
   if (!f.eval->ok) {
     f.error = f.eval->error;
     return f;
   }
   f.ok = true;
-  f.objective = problem->Objective(set, theta);
+  f.objective = 0.5 * f.eval->cost;
+  for (size_t k = 0; k < set.size(); ++k) {
+    const Atom& a = problem->Atoms()[set[k]];
+    const double r = a.prior.Residual(theta[k], a.spec);
+    f.objective += 0.5 * r * r;
+  }
   f.log_prior = problem->LogPrior(set, theta);
   const int k = static_cast<int>(set.size());
   const int n = problem->ResidualCount();

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <deque>
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
@@ -13,6 +14,7 @@
 #include "ema/correlation/dof_match.hpp"
 #include "ema/diagnose/diagnose.hpp"
 #include "ema/model/effects.hpp"
+#include "ema/model/solve.hpp"
 
 namespace ema::diagnose::detail {
 
@@ -57,7 +59,9 @@ struct Atom {
   Prior prior;
   bool hertz = false;    ///< series_compliance as a Hertz contact (modulus free, radius fixed)
   bool member = false;   ///< on one member of a group or one point
-  std::string group;     ///< the spring group of a springs target ("" otherwise)
+  bool part = false;     ///< on FE parts (a part group, one member, a part in no group)
+  std::string group;     ///< the spring group or part group of the target ("" otherwise)
+  std::string words;     ///< the target in words: "member 'J3' of part group 'joints'", "body 'top'", "point 101"
 
   model::Effect With(double theta) const;
   std::string Label() const;  ///< "stiffness_scale of 'joints/J3'"
@@ -83,7 +87,20 @@ struct SetupData {
   Eigen::VectorXd sigma_shape;  ///< 1σ of each test mode's (1 − MAC)
   Eigen::VectorXd half_power_hz;  ///< 2ζf of each test mode: model modes closer than this blend
   size_t model_dof_count = 0;
+  /// The test's sensors per roving set (empty: none declared): each set is solved with its own.
+  std::vector<std::vector<model::PointMass>> sensors;
+  std::vector<double> set_weight;  ///< per set: its measured DOFs (the frequency average's weight)
+  std::vector<int> set_of_dof;     ///< per model observed DOF: the set that measured its node (-1: none)
+  int reference_row = -1;          ///< model observed DOF of the hammer DOF (-1: unknown)
+  /// The test's frequencies are the equal-weight means over its roving sets (`ema fit` fitted each
+  /// set with its own poles): the model's are averaged alike. Otherwise each set weighs by the
+  /// energy of the mode at its measured DOFs (how a fit of all sets at once weighs them).
+  bool equal_set_weights = false;
 };
+
+/// The model's modes as the test saw them: each roving set's solution with its sensors, frequencies
+/// averaged over the sets, each DOF's shape from the set that measured it (SetupModes).
+model::Solution AsTested(const SetupData& setup, const std::vector<model::Solution>& per_set);
 
 struct Evaluation {
   bool ok = false;
@@ -100,18 +117,37 @@ struct Evaluation {
 class Evaluator {
  public:
   Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options, int max_modes);
+  ~Evaluator();
   int ResidualCount() const { return residual_count_; }
   int Solves() const { return solves_; }
+  int ReducedSolves() const { return reduced_solves_; }
+  /// Exact: the model with `effects` solved in full for every setup.
   Evaluation Evaluate(const std::vector<model::Effect>& effects);
+  /// True when the model is FE-sized (DiagnoseOptions::reduced_model_min_dofs): EvaluateReduced
+  /// then solves through reduced models.
+  bool UsesReducedModels() const { return reduced_; }
+  /// The model with `effects` solved through the reduced model whose basis holds the base's modes
+  /// (or, with `centre`, the modes of the base with those effects) and the responses to `probes`;
+  /// `key` names the set of probes (one reduced model per key, centre and setup).
+  Evaluation EvaluateReduced(const std::string& key, const std::vector<std::vector<model::Effect>>& probes,
+                             const std::vector<model::Effect>& centre, const std::vector<model::Effect>& effects);
   const DiagnoseOptions& Options() const { return options_; }
 
  private:
+  // Residuals of every setup's test modes against the model modes `solve` gives for that setup
+  // with the given extra (sensor) masses.
+  Evaluation Compare(const std::function<model::Solution(std::size_t setup, const std::vector<model::PointMass>&)>& solve);
+
+  struct Reduced;
   const model::Model& base_;
   std::vector<SetupData> setups_;
   const DiagnoseOptions& options_;
   int max_modes_ = 0;
   int residual_count_ = 0;
   int solves_ = 0;
+  int reduced_solves_ = 0;
+  bool reduced_ = false;
+  std::unique_ptr<Reduced> reduced_models_;
 };
 
 /// Modal phase collinearity of a complex shape (1 = a real mode up to one phase, 0 = circular).
@@ -140,6 +176,7 @@ struct Fit {
   double score = kInf;      ///< −2 log evidence, or BIC / AICc
   Eigen::VectorXd sigma_theta;
   bool ok = false;
+  bool exact = true;        ///< eval from full solves (false: through a reduced model)
   std::string error;
 };
 
@@ -147,8 +184,18 @@ struct Fit {
 /// at the same points, and each point costs one model solve per setup.
 class Problem {
  public:
-  Problem(Evaluator* evaluator, const std::vector<Atom>* atoms) : evaluator_(evaluator), atoms_(atoms) {}
+  Problem(Evaluator* evaluator, std::vector<Atom>* atoms) : evaluator_(evaluator), atoms_(atoms) {}
+  /// The evaluation of a set at θ: through the set's reduced model on FE-sized models (centred
+  /// where Recentre put it), else exact.
   std::shared_ptr<const Evaluation> At(const std::vector<int>& set, const std::vector<double>& theta);
+  /// Always exact (full solves): what is reported.
+  std::shared_ptr<const Evaluation> Exact(const std::vector<int>& set, const std::vector<double>& theta);
+  /// From now on, the set's reduced model is centred on θ (its basis from a full solve there).
+  void Recentre(const std::vector<int>& set, const std::vector<double>& theta);
+  bool Reduced() const { return evaluator_->UsesReducedModels(); }
+  /// Widens one side of an atom's searched range (end −1: the lower, +1: the upper) 1000-fold
+  /// (log parameters; a linear one by its range's width).
+  void Widen(int atom, int end);
   std::vector<model::Effect> Effects(const std::vector<int>& set, const std::vector<double>& theta) const;
   double LogPrior(const std::vector<int>& set, const std::vector<double>& theta) const;
   /// ½ cost − log prior; +∞ when the model could not be solved.
@@ -158,17 +205,23 @@ class Problem {
   int ResidualCount() const { return evaluator_->ResidualCount(); }
 
  private:
+  using Key = std::pair<std::vector<int>, std::vector<double>>;
+  std::shared_ptr<const Evaluation> Cached(std::deque<std::pair<Key, std::shared_ptr<const Evaluation>>>* cache,
+                                           const Key& key, const std::function<Evaluation()>& evaluate);
   Evaluator* evaluator_;
-  const std::vector<Atom>* atoms_;
-  std::deque<std::pair<std::pair<std::vector<int>, std::vector<double>>, std::shared_ptr<const Evaluation>>> cache_;
+  std::vector<Atom>* atoms_;
+  std::deque<std::pair<Key, std::shared_ptr<const Evaluation>>> cache_, exact_cache_;
+  std::map<std::vector<int>, std::vector<double>> centres_;
 };
 
 /// MAP refinement from `start` (Ceres: bounded, Huber loss, prior residuals, central numeric
 /// differences), then the Laplace evidence at the optimum.
 Fit FitSet(Problem* problem, const std::vector<int>& set, const std::vector<double>& start, const DiagnoseOptions& options);
 
-/// The evidence and posterior σ of a set at given θ (no refinement).
-Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<double>& theta, const DiagnoseOptions& options);
+/// The evidence and posterior σ of a set at given θ (no refinement); `exact`: its misfit from full
+/// solves (the Jacobian still through the set's reduced model, when it has one).
+Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<double>& theta, const DiagnoseOptions& options,
+           bool exact = false);
 
 // ---- search (search.cpp) ----
 

@@ -164,6 +164,21 @@ SearchResult Search(Problem* p, const DiagnoseOptions& options) {
       if (!(obj < it->second.objective - 1e-9)) return it->second;
     }
     Fit f = FitSet(p, s, t, options);
+    // Priors, not cliffs: a fit that reaches the far end of a searched range (not the end that means
+    // "no effect") is re-fitted with that side widened 1000-fold, twice at most, before it is ranked.
+    for (int round = 0; round < 2 && f.ok; ++round) {
+      bool widened = false;
+      for (size_t k = 0; k < f.atoms.size(); ++k) {
+        const ParamSpec& spec = p->Atoms()[f.atoms[k]].spec;
+        const int end = BoundEnd(spec, f.theta[k]);
+        if (end != 0 && end != spec.absent_end) {
+          p->Widen(f.atoms[k], end);
+          widened = true;
+        }
+      }
+      if (!widened) break;
+      f = FitSet(p, s, f.theta, options);
+    }
     if (it != fitted.end() && !(f.objective < it->second.objective)) return it->second;
     return fitted[s] = std::move(f);
   };

@@ -28,4 +28,9 @@ std::vector<uff::Dataset> ModeSetDatasets(const ModeSet& modes);
 /// ReadModeSet's assembly of the datasets of a file; `path` names it in messages and the source.
 ModeSet ModeSetFromDatasets(const std::filesystem::path& path, const std::vector<uff::Dataset>& datasets);
 
+/// True when the file's first non-blank byte is '{' (MODES.json rather than UFF).
+bool LooksLikeJson(const std::filesystem::path& path);
+/// Test modes in `ema fit --json`'s layout (formats/src/modes_json.cpp).
+ModeSet ReadModeSetJson(const std::filesystem::path& path);
+
 }  // namespace ema::formats

@@ -1,6 +1,8 @@
 #include "ema/formats/json_codecs.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "ema/formats/model_file.hpp"
 
@@ -51,7 +53,7 @@ json ModeJson(const ModeSet& set, std::size_t mode) {
   }
   json participation = json::array();
   for (Eigen::Index i = 0; i < m.participation.size(); ++i) participation.push_back(ComplexJson(m.participation[i]));
-  return {{"frequency_hz", m.frequency_hz},
+  json out = {{"frequency_hz", m.frequency_hz},
           {"damping_ratio", m.damping_ratio},
           {"frequency_std_hz", NumberOrNull(m.frequency_std_hz)},
           {"damping_ratio_std", NumberOrNull(m.damping_ratio_std)},
@@ -64,6 +66,17 @@ json ModeJson(const ModeSet& set, std::size_t mode) {
           {"unit_modal_mass", m.unit_modal_mass},
           {"participation", participation},
           {"shape", shape}};
+  // Roving-sensor tests: the mode as each roving set saw it (frequency_hz is their mean).
+  if (!m.set_frequency_hz.empty()) {
+    json sets = json::array();
+    for (std::size_t k = 0; k < m.set_frequency_hz.size(); ++k)
+      sets.push_back({{"frequency_hz", m.set_frequency_hz[k]},
+                      {"damping_ratio", k < m.set_damping_ratio.size() ? NumberOrNull(m.set_damping_ratio[k]) : json()},
+                      {"frequency_std_hz",
+                       k < m.set_frequency_std_hz.size() ? NumberOrNull(m.set_frequency_std_hz[k]) : json()}});
+    out["sets"] = sets;
+  }
+  return out;
 }
 
 json ModeSetJson(const ModeSet& set) {
@@ -87,6 +100,43 @@ json RefinementJson(const curvefit::FitResult& fit, curvefit::RefineMethod metho
 }
 
 }  // namespace
+
+json TestSetsJson(const FrfSet& frfs) {
+  json out = json::object();
+  if (!frfs.output_sets.empty() && frfs.output_sets.size() == frfs.outputs.size()) {
+    std::map<int, std::vector<int>> sets;
+    for (std::size_t o = 0; o < frfs.outputs.size(); ++o) {
+      std::vector<int>& nodes = sets[frfs.output_sets[o]];
+      if (std::find(nodes.begin(), nodes.end(), frfs.outputs[o].node) == nodes.end()) nodes.push_back(frfs.outputs[o].node);
+    }
+    json list = json::array();
+    for (const auto& [id, nodes] : sets) list.push_back(nodes);
+    out["roving_sets"] = list;
+  }
+  if (frfs.references.size() == 1)
+    out["reference"] = {{"node", frfs.references[0].node}, {"dir", DirectionName(frfs.references[0].direction)}};
+  return out;
+}
+
+bool ReadTestSets(const json& j, std::vector<std::vector<int>>* roving_sets, Dof* reference) {
+  if (!j.is_object() || !j.contains("roving_sets") || !j["roving_sets"].is_array()) return false;
+  std::vector<std::vector<int>> sets;
+  for (const json& set : j["roving_sets"]) {
+    if (!set.is_array()) return false;
+    std::vector<int> nodes;
+    for (const json& n : set) {
+      if (!n.is_number_integer() || n.get<long long>() <= 0 || n.get<long long>() > 2147483647) return false;
+      nodes.push_back(static_cast<int>(n.get<long long>()));
+    }
+    sets.push_back(std::move(nodes));
+  }
+  *roving_sets = std::move(sets);
+  if (j.contains("reference") && j["reference"].is_object() && j["reference"].contains("node") &&
+      j["reference"]["node"].is_number_integer() && j["reference"].contains("dir") && j["reference"]["dir"].is_string())
+    *reference = {static_cast<int>(j["reference"]["node"].get<long long>()),
+                  ParseDirection(j["reference"]["dir"].get<std::string>())};
+  return true;
+}
 
 json ModalModelJson(const curvefit::ModalModel& model) {
   json poles = json::array();
@@ -269,6 +319,10 @@ json CandidateJson(const diagnose::Candidate& c) {
               {"explained_pct", NumberOrNull(c.explained_pct)},
               {"paired_modes", c.paired_modes},
               {"plausible", c.plausible},
+              {"reduced_chi2", NumberOrNull(c.reduced_chi2)},
+              {"noise_consistent", c.noise_consistent},
+              {"flags", c.flags},
+              {"prior_z", json::object()},
               {"tied_with", c.tied_with},
               {"description", diagnose::DescribeCandidate(c)},
               {"effects", json::array()}};
@@ -278,8 +332,22 @@ json CandidateJson(const diagnose::Candidate& c) {
     out["parameters"][keys[i]] = p.value;
     out["uncertainty"][keys[i]] = NumberOrNull(p.sigma);
     out["prior_sigma"][keys[i]] = NumberOrNull(p.prior_sigma);
+    out["prior_z"][keys[i]] = NumberOrNull(p.prior_z);
     if (p.at_bound) out["at_bound"].push_back(keys[i]);
+    if (p.outside_prior) out["outside_prior"].push_back(keys[i]);
   }
+  if (c.reduced_model) out["reduced_model"] = true;
+  // Evidence per test mode: where the candidate leaves the model against the test, in σ.
+  out["modes"] = json::array();
+  for (const auto& m : c.modes)
+    out["modes"].push_back({{"setup", m.setup},
+                            {"test_mode", m.test_mode + 1},
+                            {"test_frequency_hz", m.test_frequency_hz},
+                            {"sigma_hz", NumberOrNull(m.sigma_hz)},
+                            {"model_frequency_hz", NumberOrNull(m.model_frequency_hz)},
+                            {"frequency_misfit_sigma", NumberOrNull(m.frequency_misfit_sigma)},
+                            {"mac", NumberOrNull(m.mac)},
+                            {"shape_misfit_sigma", NumberOrNull(m.shape_misfit_sigma)}});
   for (const auto& e : c.effects) out["effects"].push_back(EffectJson(e));
   if (!c.error.empty()) out["error"] = c.error;
   return out;
@@ -331,7 +399,12 @@ json DiagnosisModeRows(const diagnose::Candidate& before, const diagnose::Candid
                     {"mac_before", NumberOrNull(b.mac)},
                     {"model_frequency_hz_after", NumberOrNull(a.model_frequency_hz)},
                     {"agreement_pct_after", NumberOrNull(a.agreement_pct)},
-                    {"mac_after", NumberOrNull(a.mac)}});
+                    {"mac_after", NumberOrNull(a.mac)},
+                    {"sigma_hz", NumberOrNull(b.sigma_hz)},
+                    {"frequency_misfit_sigma_before", NumberOrNull(b.frequency_misfit_sigma)},
+                    {"frequency_misfit_sigma_after", NumberOrNull(a.frequency_misfit_sigma)},
+                    {"shape_misfit_sigma_before", NumberOrNull(b.shape_misfit_sigma)},
+                    {"shape_misfit_sigma_after", NumberOrNull(a.shape_misfit_sigma)}});
   }
   return rows;
 }

@@ -9,6 +9,8 @@
 #include <set>
 #include <sstream>
 #include <toml++/toml.h>
+#include <Eigen/SparseCholesky>
+#include <map>
 
 #include "ema/core/error.hpp"
 #include "ema/core/types.hpp"
@@ -249,23 +251,35 @@ class Reader : public TomlFields {
     return a;
   }
 
+  // An [fe] or [[fe.part]] matrix file: it exists, reads as Matrix Market and is symmetric.
+  Eigen::SparseMatrix<double> FeMatrix(const toml::table& t, const char* key, const std::string& context,
+                                       std::string* file) const {
+    const toml::node& n = *t.get(key);
+    const fs::path f = Resolve(String(n, key));
+    std::error_code ec;  // an unusable name (too long, ...) is "not found", not a filesystem_error
+    if (!fs::exists(f, ec)) throw InputError(At(n), context + " " + key + ": file '" + f.string() + "' not found");
+    Eigen::SparseMatrix<double> a = ReadMatrixMarket(f);
+    RequireSymmetric(a, f);
+    *file = f.string();
+    return a;
+  }
+
   void ReadFe(const toml::table& t, model::Model* m) const {
-    CheckKeys(t, {"mass", "stiffness", "dofs", "nodes"}, "[fe]");
-    const fs::path mass = Resolve(String(Require(t, "mass", "[fe]"), "mass"));
-    const fs::path stiffness = Resolve(String(Require(t, "stiffness", "[fe]"), "stiffness"));
-    const fs::path dofs = Resolve(String(Require(t, "dofs", "[fe]"), "dofs"));
-    for (const char* key : {"mass", "stiffness", "dofs"}) {
-      const fs::path f = Resolve(String(*t.get(key), key));
-      std::error_code ec;  // an unusable name (too long, ...) is "not found", not a filesystem_error
-      if (!fs::exists(f, ec)) throw InputError(At(*t.get(key)), "[fe] " + std::string(key) + ": file '" + f.string() + "' not found");
+    CheckKeys(t, {"mass", "stiffness", "dofs", "nodes", "part"}, "[fe]");
+    const toml::node* parts = t.get("part");
+    // With parts, [fe].mass and [fe].stiffness are optional: the parts may carry all of it.
+    if (!parts) {
+      Require(t, "mass", "[fe]");
+      Require(t, "stiffness", "[fe]");
     }
-    m->fe.mass = ReadMatrixMarket(mass);
-    m->fe.stiffness = ReadMatrixMarket(stiffness);
-    RequireSymmetric(m->fe.mass, mass);
-    RequireSymmetric(m->fe.stiffness, stiffness);
+    const fs::path dofs = Resolve(String(Require(t, "dofs", "[fe]"), "dofs"));
+    {
+      std::error_code ec;
+      if (!fs::exists(dofs, ec)) throw InputError(At(*t.get("dofs")), "[fe] dofs: file '" + dofs.string() + "' not found");
+    }
+    if (t.get("mass")) m->fe.mass = FeMatrix(t, "mass", "[fe]", &m->fe.mass_file);
+    if (t.get("stiffness")) m->fe.stiffness = FeMatrix(t, "stiffness", "[fe]", &m->fe.stiffness_file);
     m->fe.origin = dofs.string();
-    m->fe.mass_file = mass.string();
-    m->fe.stiffness_file = stiffness.string();
     // DOF map: node,dof per matrix row.
     std::ifstream in(dofs);
     if (!in) throw InputError(At(*t.get("dofs")), "cannot open DOF map '" + dofs.string() + "'");
@@ -286,13 +300,121 @@ class Reader : public TomlFields {
       }
       m->fe.dofs.push_back({static_cast<int>(node), code});
     });
-    if (m->fe.dofs.size() != static_cast<std::size_t>(m->fe.mass.rows()))
-      throw InputError(dofs.string(), "DOF map has " + std::to_string(m->fe.dofs.size()) + " rows but " + mass.string() +
+    const auto rows = static_cast<Eigen::Index>(m->fe.dofs.size());
+    if (m->fe.mass.rows() > 0 && m->fe.mass.rows() != rows)
+      throw InputError(dofs.string(), "DOF map has " + std::to_string(rows) + " rows but " + m->fe.mass_file +
                                           " has " + std::to_string(m->fe.mass.rows()) + " rows");
-    if (m->fe.mass.rows() != m->fe.stiffness.rows())
-      throw InputError(stiffness.string(), "stiffness matrix has " + std::to_string(m->fe.stiffness.rows()) +
-                                               " rows but the mass matrix has " + std::to_string(m->fe.mass.rows()));
+    if (m->fe.stiffness.rows() > 0 && m->fe.mass.rows() > 0 && m->fe.mass.rows() != m->fe.stiffness.rows())
+      throw InputError(m->fe.stiffness_file, "stiffness matrix has " + std::to_string(m->fe.stiffness.rows()) +
+                                                 " rows but the mass matrix has " + std::to_string(m->fe.mass.rows()));
+    if (m->fe.stiffness.rows() > 0 && m->fe.stiffness.rows() != rows)
+      throw InputError(dofs.string(), "DOF map has " + std::to_string(rows) + " rows but " + m->fe.stiffness_file +
+                                          " has " + std::to_string(m->fe.stiffness.rows()) + " rows");
+    if (parts) ReadParts(*parts, m);
     if (const toml::node* nodes = t.get("nodes")) ReadNodes(Resolve(String(*nodes, "nodes")), *nodes, m);
+  }
+
+  // [[fe.part]] blocks (model-format.md "FE models built from parts").
+  void ReadParts(const toml::node& node, model::Model* m) const {
+    const toml::array* list = node.as_array();
+    if (!list) throw InputError(At(node), "'fe.part' must be an array of tables: [[fe.part]]");
+    const auto rows = static_cast<Eigen::Index>(m->fe.dofs.size());
+    // Part groups and parts in no group share one namespace with spring groups and bodies.
+    std::set<std::string> spring_groups, bodies, part_names;
+    for (const auto& s : m->springs) spring_groups.insert(s.group);
+    for (const auto& b : m->bodies) bodies.insert(b.name);
+    std::map<std::string, int> targets;  // group or lone part name -> line
+    for (const toml::node& e : *list) {
+      const toml::table& t = Table(e, "fe.part");
+      CheckKeys(t, {"name", "group", "stiffness", "mass", "uncertainty"}, "[[fe.part]]");
+      model::FePart p;
+      p.line = Line(t);
+      p.name = String(Require(t, "name", "[[fe.part]]"), "name");
+      const std::string ctx = "part '" + p.name + "'";
+      if (p.name.empty() || p.name.find('/') != std::string::npos || p.name.find('+') != std::string::npos)
+        throw InputError(At(*t.get("name")), "[[fe.part]]: name must be a non-empty name without '/' or '+'");
+      if (!part_names.insert(p.name).second) throw InputError(At(t), "[[fe.part]]: duplicate part name '" + p.name + "'");
+      if (const toml::node* g = t.get("group")) {
+        p.group = String(*g, "group");
+        if (p.group.empty() || p.group.find('/') != std::string::npos || p.group.find('+') != std::string::npos)
+          throw InputError(At(*g), ctx + ": group must be a non-empty name without '/' or '+'");
+      }
+      const std::string target = p.group.empty() ? p.name : p.group;
+      const char* what = p.group.empty() ? "part" : "part group";
+      if (spring_groups.count(target))
+        throw InputError(At(t), ctx + ": " + what + " name '" + target +
+                                    "' is also a spring group; part groups, parts in no group, spring groups and bodies "
+                                    "share one namespace (model-format.md)");
+      if (bodies.count(target))
+        throw InputError(At(t), ctx + ": " + what + " name '" + target + "' is also a body; part groups, parts in no "
+                                    "group, spring groups and bodies share one namespace (model-format.md)");
+      if (const auto it = targets.find(target); it != targets.end() && (p.group.empty() || it->second < 0))
+        throw InputError(At(t), ctx + ": name '" + target + "' is already used by another part or part group");
+      targets[target] = p.group.empty() ? -p.line : p.line;
+      if (!t.get("stiffness") && !t.get("mass"))
+        throw InputError(At(t), ctx + ": expected 'stiffness' (and optionally 'mass'): the part's own matrices");
+      for (const char* key : {"stiffness", "mass"}) {
+        if (!t.get(key)) continue;
+        const bool is_stiffness = std::string(key) == "stiffness";
+        std::string& file = is_stiffness ? p.stiffness_file : p.mass_file;
+        auto matrix = std::make_shared<const Eigen::SparseMatrix<double>>(FeMatrix(t, key, "[[fe.part]] " + p.name, &file));
+        const Eigen::SparseMatrix<double>* a = matrix.get();
+        (is_stiffness ? p.stiffness : p.mass) = matrix;
+        if (a->rows() != rows)
+          throw InputError(At(t), ctx + ": " + file + " is " + std::to_string(a->rows()) + "x" + std::to_string(a->cols()) +
+                                      " but the [fe] DOF map has " + std::to_string(rows) + " rows: expected a " +
+                                      std::to_string(rows) + "x" + std::to_string(rows) +
+                                      " matrix in the DOF map's order (the part's contribution to the global matrix)");
+        RequirePositiveSemiDefinite(*a, m->fe, At(t) + ": " + ctx + " (" + file + ")", key);
+      }
+      if (const toml::node* u = t.get("uncertainty")) p.uncertainty = Uncertainty(*u, ctx);
+      m->fe.parts.push_back(std::move(p));
+    }
+  }
+
+  // A part's matrix is a sum of element matrices, each positive semi-definite. An LDLᵀ of its
+  // non-zero rows, shifted by 1e-9 of its largest diagonal entry, then has no negative pivot
+  // (Sylvester's law of inertia); a negative one names the DOF.
+  static void RequirePositiveSemiDefinite(const Eigen::SparseMatrix<double>& a, const model::FeMatrices& fe,
+                                          const std::string& where, const char* what) {
+    std::vector<int> used(static_cast<std::size_t>(a.rows()), -1), rows;
+    for (int c = 0; c < a.outerSize(); ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it)
+        if (it.value() != 0.0 && used[static_cast<std::size_t>(it.row())] < 0) {
+          used[static_cast<std::size_t>(it.row())] = static_cast<int>(rows.size());
+          rows.push_back(static_cast<int>(it.row()));
+        }
+    if (rows.empty()) return;
+    std::vector<Eigen::Triplet<double>> entries;
+    double largest = 0.0;
+    for (int c = 0; c < a.outerSize(); ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it) {
+        const int r = used[static_cast<std::size_t>(it.row())], k = used[static_cast<std::size_t>(it.col())];
+        if (r < 0 || k < 0) continue;
+        entries.emplace_back(r, k, it.value());
+        if (r == k) largest = std::max(largest, std::abs(it.value()));
+      }
+    const auto n = static_cast<Eigen::Index>(rows.size());
+    for (Eigen::Index i = 0; i < n; ++i) entries.emplace_back(i, i, 1e-9 * largest);
+    Eigen::SparseMatrix<double> sub(n, n);
+    sub.setFromTriplets(entries.begin(), entries.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(sub);
+    Eigen::Index bad = -1;
+    if (ldlt.info() == Eigen::Success) {
+      const Eigen::VectorXd d = ldlt.vectorD();
+      for (Eigen::Index i = 0; i < d.size() && bad < 0; ++i)
+        if (!(d(i) > 0.0)) bad = ldlt.permutationPinv().indices()(i);
+    } else {
+      bad = 0;
+    }
+    if (bad < 0) return;
+    static const char* kDofNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+    const auto& dof = fe.dofs[static_cast<std::size_t>(rows[static_cast<std::size_t>(bad)])];
+    throw InputError(where, std::string("the part's ") + what + " is not positive semi-definite (a negative pivot at node " +
+                                std::to_string(dof.node) + " " + kDofNames[std::clamp(dof.dof, 1, 6) - 1] +
+                                ", matrix row " + std::to_string(rows[static_cast<std::size_t>(bad)] + 1) +
+                                "): expected the sum of the part's element matrices, which adds no negative " +
+                                "stiffness or mass; with the part, K could be indefinite");
   }
 
   /// nodes.csv (node,x,y,z) or a UFF file with dataset 15 or 2411 (read with the UFF reader).
@@ -570,17 +692,17 @@ std::pair<size_t, size_t> LiteralAt(const std::string& text, size_t line, size_t
   return {std::string::npos, 0};
 }
 
-// Every path-valued string of a model file: `file =` of laws (anywhere) and [fe] files.
+// Every path-valued string of a model file: `file =` of laws (anywhere), [fe] and [[fe.part]] files.
 void CollectPaths(const toml::node& node, bool fe, std::vector<const toml::node*>* out) {
   if (const toml::table* t = node.as_table()) {
     for (const auto& [k, v] : *t) {
       const std::string key(k.str());
       const bool path_key = key == "file" || (fe && (key == "mass" || key == "stiffness" || key == "dofs" || key == "nodes"));
       if (path_key && v.is_string()) out->push_back(&v);
-      else CollectPaths(v, false, out);
+      else CollectPaths(v, fe && key == "part", out);  // [[fe.part]] tables name files as [fe] does
     }
   } else if (const toml::array* a = node.as_array()) {
-    for (const toml::node& e : *a) CollectPaths(e, false, out);
+    for (const toml::node& e : *a) CollectPaths(e, fe, out);
   }
 }
 

@@ -1,5 +1,6 @@
 #include "ema/formats/project_file.hpp"
 
+#include <cmath>
 #include <set>
 #include <sstream>
 #include <toml++/toml.h>
@@ -82,7 +83,7 @@ Project ReadProjectFile(const fs::path& path) {
   for (const toml::node& node : *tests) {
     const toml::table* t = node.as_table();
     if (!t) throw InputError(Where(file, node), "[[test]] must be a table");
-    CheckKeys(file, *t, {"setup", "name", "time", "frf"}, "[[test]]");
+    CheckKeys(file, *t, {"setup", "name", "time", "frf", "sensor_mass"}, "[[test]]");
     ProjectTest test;
     if ((*t)["setup"]) test.setup = String(file, *(*t)["setup"].node(), "setup");
     test.name = (*t)["name"] ? String(file, *(*t)["name"].node(), "name") : test.setup;
@@ -101,6 +102,13 @@ Project ReadProjectFile(const fs::path& path) {
       }
     }
     if (const toml::node* frf = (*t)["frf"].node()) test.frf = ExistingFile(file, *frf, "frf");
+    if (const toml::node* m = (*t)["sensor_mass"].node()) {
+      const std::optional<double> v = m->value<double>();
+      if (!v || !(m->is_floating_point() || m->is_integer()) || !(*v >= 0.0) || !std::isfinite(*v) || *v > 1e3)
+        throw InputError(Where(file, *m), "sensor_mass must be a mass in kg per measured node, >= 0 (0.0112 for an "
+                                          "11.2 g accelerometer)");
+      test.sensor_mass = *v;
+    }
     if (test.time.empty() && !test.frf)
       throw InputError(Where(file, *t), "[[test]] '" + test.name + "' needs time = [files] (or frf = \"FRF.unv\")");
     if (!test.time.empty() && test.frf)

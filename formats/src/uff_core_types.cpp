@@ -355,11 +355,21 @@ FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Functi
     if (GetDouble(keys, "averages", &v)) averages[{r, o}] = static_cast<int>(v);
     if (GetDouble(keys, "window_decay", &v)) set.window_decay_rate = v;
     if (GetDouble(keys, "roving_hammer", &v)) set.roving_hammer = v != 0.0;
+    // The roving set of the output (ID line 4, "ema set=K"; files of other tools: unknown).
+    if (double k; GetDouble(EmaKeys(f.id[3]), "set", &k) && k >= 0.0 && k < 1e6) {
+      if (set.output_sets.size() < set.outputs.size()) set.output_sets.resize(set.outputs.size(), -1);
+      set.output_sets[static_cast<size_t>(o)] = static_cast<int>(k);
+    }
     std::vector<double>().swap(f.y);  // copied: its memory serves the next stage, not a second copy
   }
   for (int r = 0; r < set.ReferenceCount(); ++r)
     for (int o = 0; o < set.OutputCount(); ++o)
       if (!written[static_cast<size_t>(r) * set.OutputCount() + o]) set.h[r].col(o).setConstant(nan_c);
+  if (!set.output_sets.empty()) {
+    set.output_sets.resize(set.outputs.size(), -1);
+    // Sets are known for every output or for none.
+    if (std::find(set.output_sets.begin(), set.output_sets.end(), -1) != set.output_sets.end()) set.output_sets.clear();
+  }
   if (!averages.empty()) {
     set.averages = Eigen::MatrixXi::Zero(set.ReferenceCount(), set.OutputCount());
     for (const auto& [k, v] : averages) set.averages(k.first, k.second) = v;
@@ -440,7 +450,9 @@ std::vector<Dataset> FrfSetDatasets(const FrfSet& frfs) {
       f.id[0] = "ema FRF " + DofName(frfs.outputs[o]) + " / " + DofName(frfs.references[r]);
       f.id[1] = "NONE";
       f.id[2] = Today();
-      f.id[3] = "NONE";
+      f.id[3] = o < static_cast<int>(frfs.output_sets.size()) && frfs.output_sets[o] >= 0
+                    ? "ema set=" + std::to_string(frfs.output_sets[o])
+                    : "NONE";
       // Our metadata: FrfSet fields UFF has no place for, and the full grid (lines that are
       // NaN at the ends are not written).
       std::string meta = "ema window_decay=" + Repr(frfs.window_decay_rate) + " roving_hammer=" +
@@ -506,6 +518,7 @@ Eigen::Matrix3d LocalAxes18(const uff::CoordinateSystem18& cs) {
 }  // namespace
 
 ModeSet ReadModeSet(const std::filesystem::path& path) {
+  if (LooksLikeJson(path)) return ReadModeSetJson(path);  // MODES.json from `ema fit --json` or another tool
   uff::Reader reader(path);
   std::vector<Dataset> datasets;
   for (Dataset d; reader.Next(&d);) datasets.push_back(std::move(d));

@@ -134,6 +134,23 @@ FrfResult EstimateFrfs(const HammerMeasurement& test, const FrfOptions& options,
   set.outputs = test.outputs;
   set.roving_hammer = test.roving_hammer;
   set.window_decay_rate = processed.decay_rate;
+  // Roving sets: the impacts of one file that share their response nodes, numbered in order of
+  // first appearance; each output belongs to the first set that measured it.
+  if (!test.roving_hammer) {
+    std::map<std::pair<int, std::vector<int>>, int> set_of;
+    set.output_sets.assign(static_cast<size_t>(n_out), -1);
+    for (const Impact& imp : test.impacts) {
+      std::vector<int> nodes;
+      for (int rec : imp.responses) nodes.push_back(test.records[static_cast<size_t>(rec)].channel.node);
+      std::sort(nodes.begin(), nodes.end());
+      nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+      const int id = set_of.emplace(std::make_pair(imp.set, nodes), static_cast<int>(set_of.size())).first->second;
+      for (int rec : imp.responses) {
+        int& o = set.output_sets[static_cast<size_t>(out_index(test.records[static_cast<size_t>(rec)].channel))];
+        if (o < 0) o = id;
+      }
+    }
+  }
   const Quantity measured = bucket_quantity.empty() ? Quantity::kAcceleration : bucket_quantity.front();
   set.output_quantity = measured;
   set.force_unit = test.records[test.impacts.front().force].unit.empty() ? "N" : test.records[test.impacts.front().force].unit;

@@ -28,6 +28,19 @@ double Param(const Model& model, const Effect& e, const std::string& key, bool p
   return v;
 }
 
+// The names a stiffness or mass target may take, for messages: spring groups, part groups, parts
+// in no group (and bodies for mass_scale).
+std::string KnownTargets(const Model& model, bool bodies) {
+  std::set<std::string> names;
+  for (const Spring& s : model.springs) names.insert(s.group);
+  for (const FePart& p : model.fe.parts) names.insert(p.group.empty() ? p.name : p.group);
+  if (bodies)
+    for (const Body& b : model.bodies) names.insert(b.name);
+  std::string known;
+  for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+  return known.empty() ? "none" : known;
+}
+
 std::vector<Spring*> GroupSprings(Model& model, const Effect& e) {
   std::vector<Spring*> out;
   for (int i : TargetSprings(model, e.target)) out.push_back(&model.springs[i]);
@@ -44,6 +57,9 @@ std::vector<Spring*> GroupSprings(Model& model, const Effect& e) {
       throw InputError(Where(model, e), "no member '" + e.target.substr(slash + 1) + "' in group '" +
                                             e.target.substr(0, slash) + "' (members: " + members + ")");
     }
+    if (!model.fe.parts.empty())
+      throw InputError(Where(model, e), "no spring group, part group or part '" + e.target + "' (targets: " +
+                                            KnownTargets(model, false) + ")");
     throw InputError(Where(model, e), "no spring group '" + e.target + "' (groups: " + (known.empty() ? "none" : known) + ")");
   }
   return out;
@@ -54,6 +70,9 @@ Body& TargetBody(Model& model, const Effect& e) {
   if (!b) {
     std::string known;
     for (const Body& x : model.bodies) known += (known.empty() ? "" : ", ") + x.name;
+    if (!model.fe.parts.empty() && e.kind == "mass_scale")
+      throw InputError(Where(model, e), "no body, part group or part '" + e.target + "' (targets: " +
+                                            KnownTargets(model, true) + ")");
     throw InputError(Where(model, e), "no body '" + e.target + "' (bodies: " + (known.empty() ? "none" : known) + ")");
   }
   return *b;
@@ -104,9 +123,37 @@ void ApplySeriesCompliance(Model& model, const Effect& e) {
   }
 }
 
+// The parts a target names; throws naming the target when it names none (and no spring group).
+std::vector<FePart*> Parts(Model& model, const Effect& e, bool bodies) {
+  std::vector<FePart*> out;
+  for (int i : TargetParts(model, e.target)) out.push_back(&model.fe.parts[static_cast<std::size_t>(i)]);
+  if (out.empty()) {
+    const auto slash = e.target.find('/');
+    if (slash != std::string::npos) {
+      std::string members;
+      for (const FePart& p : model.fe.parts)
+        if (p.group == e.target.substr(0, slash)) members += (members.empty() ? "" : ", ") + p.name;
+      if (!members.empty())
+        throw InputError(Where(model, e), "no part '" + e.target.substr(slash + 1) + "' in part group '" +
+                                              e.target.substr(0, slash) + "' (members: " + members + ")");
+    }
+    throw InputError(Where(model, e), "no spring group, part group or part '" + e.target + "' (targets: " +
+                                          KnownTargets(model, bodies) + ")");
+  }
+  return out;
+}
+
 void ApplyStiffnessScale(Model& model, const Effect& e) {
   const double f = Param(model, e, "factor", true);
-  for (Spring* s : GroupSprings(model, e)) s->stiffness_factor *= f;
+  if (!TargetSprings(model, e.target).empty() || model.fe.parts.empty()) {
+    for (Spring* s : GroupSprings(model, e)) s->stiffness_factor *= f;
+    return;
+  }
+  for (FePart* p : Parts(model, e, false)) {
+    if (!p->HasStiffness())
+      throw InputError(Where(model, e), "part '" + p->name + "' has no stiffness matrix to scale");
+    p->stiffness_factor *= f;
+  }
 }
 
 void ApplyOperatingPoint(Model& model, const Effect& e) {
@@ -151,6 +198,13 @@ void ApplyAddedMass(Model& model, const Effect& e) {
 
 void ApplyMassScale(Model& model, const Effect& e) {
   const double f = Param(model, e, "factor", true);
+  if (!model.FindBody(e.target) && !model.fe.parts.empty()) {
+    for (FePart* p : Parts(model, e, true)) {
+      if (!p->HasMass()) throw InputError(Where(model, e), "part '" + p->name + "' has no mass matrix to scale");
+      p->mass_factor *= f;
+    }
+    return;
+  }
   Body& b = TargetBody(model, e);
   b.mass *= f;
   b.inertia *= f;
@@ -177,21 +231,23 @@ void ApplyGroundSpring(Model& model, const Effect& e) {
 }  // namespace
 
 const std::vector<EffectKindInfo>& EffectKindTable() {
-  // Ranges: wide, so that a true effect never sits on a bound. Priors: docs/diagnose.md.
+  // Ranges: wide enough that physics does not reach them (a fit that reaches a far end is re-fitted
+  // with the range widened there, diagnose/search.cpp); the priors, not the ranges, say what is
+  // plausible. Priors: docs/diagnose.md.
   static const std::vector<EffectKindInfo> kTable = {
-      {EffectKind::kSeriesCompliance, "series_compliance", "k", EffectTarget::kSprings, true, 1e-3, 1e3, +1,
+      {EffectKind::kSeriesCompliance, "series_compliance", "k", EffectTarget::kSprings, true, 1e-4, 1e4, +1,
        PriorShape::kLogNormal, 1.5, "1σ of ln(k / the target's mean stiffness)",
        "a mount, joint or adhesive layer in series with the interface", ApplySeriesCompliance},
-      {EffectKind::kStiffnessScale, "stiffness_scale", "factor", EffectTarget::kSprings, true, 0.02, 50.0, 0,
+      {EffectKind::kStiffnessScale, "stiffness_scale", "factor", EffectTarget::kSprings, true, 1e-3, 1e3, 0,
        PriorShape::kLogNormal, 0.5, "1σ of ln(factor); a spring's `uncertainty` overrides it",
        "the interface stiffness itself is mis-estimated", ApplyStiffnessScale},
-      {EffectKind::kOperatingPoint, "operating_point", "value", EffectTarget::kSprings, true, 0.1, 10.0, 0,
+      {EffectKind::kOperatingPoint, "operating_point", "value", EffectTarget::kSprings, true, 0.05, 20.0, 0,
        PriorShape::kLogNormal, 0.5, "1σ of ln(value / nominal value)",
        "the gap, preload or setting differs from the nominal one", ApplyOperatingPoint},
-      {EffectKind::kAddedMass, "added_mass", "mass", EffectTarget::kPoints, false, 1e-5, 1.0, -1,
+      {EffectKind::kAddedMass, "added_mass", "mass", EffectTarget::kPoints, false, 1e-5, 10.0, -1,
        PriorShape::kHalfNormal, 0.02, "1σ of the mass per point, as a share of the model's mass",
        "sensor mass loading, cables, payload", ApplyAddedMass},
-      {EffectKind::kMassScale, "mass_scale", "factor", EffectTarget::kBody, false, 0.1, 10.0, 0,
+      {EffectKind::kMassScale, "mass_scale", "factor", EffectTarget::kBody, false, 0.01, 100.0, 0,
        PriorShape::kLogNormal, 0.05, "1σ of ln(factor); a body's `uncertainty` overrides it",
        "body mass or inertia mis-estimated", ApplyMassScale},
       {EffectKind::kGroundSpring, "ground_spring", "k", EffectTarget::kBody, false, 1e-5, 1e4, -1,
@@ -426,6 +482,15 @@ std::vector<int> TargetSprings(const Model& model, const std::string& target) {
   const std::string group = target.substr(0, slash), name = target.substr(slash + 1);
   for (const Member& m : Members(model))
     if (m.group == group && m.name == name) return m.springs;
+  return out;
+}
+
+std::vector<int> TargetParts(const Model& model, const std::string& target) {
+  std::vector<int> out;
+  const auto& parts = model.fe.parts;
+  for (size_t i = 0; i < parts.size(); ++i)
+    if (parts[i].group == target || (parts[i].group.empty() && parts[i].name == target) || parts[i].Target() == target)
+      out.push_back(static_cast<int>(i));
   return out;
 }
 

@@ -50,15 +50,23 @@ DofIndex BuildIndex(const Model& model) {
   index.body_dofs = index.n;
   const FeMatrices& fe = model.fe;
   if (!fe.Empty()) {
-    const auto rows = static_cast<std::size_t>(fe.mass.rows());
-    if (fe.mass.rows() != fe.mass.cols() || fe.stiffness.rows() != fe.stiffness.cols() ||
-        fe.mass.rows() != fe.stiffness.rows())
-      throw InputError(fe.origin, "[fe] mass matrix is " + std::to_string(fe.mass.rows()) + "x" +
-                                      std::to_string(fe.mass.cols()) + " but stiffness is " +
-                                      std::to_string(fe.stiffness.rows()) + "x" + std::to_string(fe.stiffness.cols()));
-    if (fe.dofs.size() != rows)
-      throw InputError(fe.origin, "[fe] DOF map has " + std::to_string(fe.dofs.size()) +
-                                      " rows but the matrices have " + std::to_string(rows) + " rows");
+    const auto rows = static_cast<Eigen::Index>(fe.dofs.size());
+    // Every FE matrix ([fe] and parts) is n x n in the DOF map's order; 0 x 0 means "none".
+    auto check = [&](const Eigen::SparseMatrix<double>& a, const std::string& file, const std::string& where) {
+      if (a.rows() == 0 && a.cols() == 0) return;
+      if (a.rows() != rows || a.cols() != rows)
+        throw InputError(where, (file.empty() ? std::string("matrix") : file) + " is " + std::to_string(a.rows()) + "x" +
+                                    std::to_string(a.cols()) + " but the [fe] DOF map has " + std::to_string(rows) +
+                                    " rows: expected a " + std::to_string(rows) + "x" + std::to_string(rows) +
+                                    " matrix in the DOF map's order");
+    };
+    check(fe.mass, fe.mass_file, fe.origin);
+    check(fe.stiffness, fe.stiffness_file, fe.origin);
+    for (const FePart& part : fe.parts) {
+      const std::string where = model.Where(part.line) + ": part '" + part.name + "'";
+      if (part.stiffness) check(*part.stiffness, part.stiffness_file, where);
+      if (part.mass) check(*part.mass, part.mass_file, where);
+    }
     for (std::size_t i = 0; i < fe.dofs.size(); ++i) {
       const auto& d = fe.dofs[i];
       if (d.dof < 1 || d.dof > 6)
@@ -145,7 +153,7 @@ const Setup* FindSetup(const Model& model, const std::string& name) {
 
 }  // namespace
 
-System Assemble(const Model& model, const SolveOptions& options) {
+System Assemble(const Model& model, const SolveOptions& options, FeAssembly fe_matrices) {
   const DofIndex index = BuildIndex(model);
   const Setup* setup = FindSetup(model, options.setup);
   if (setup) {
@@ -219,11 +227,19 @@ System Assemble(const Model& model, const SolveOptions& options) {
   }
   if (!model.fe.Empty()) {
     const int o = index.body_dofs;
-    for (const auto* src : {&model.fe.mass, &model.fe.stiffness}) {
-      Triplets& t = src == &model.fe.mass ? mt : kt;
-      for (int c = 0; c < src->outerSize(); ++c)
-        for (Eigen::SparseMatrix<double>::InnerIterator it(*src, c); it; ++it)
-          t.emplace_back(o + static_cast<int>(it.row()), o + static_cast<int>(it.col()), it.value());
+    auto add = [&](const Eigen::SparseMatrix<double>& src, double factor, Triplets* t) {
+      if (src.rows() == 0 || factor == 0.0) return;
+      for (int c = 0; c < src.outerSize(); ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(src, c); it; ++it)
+          t->emplace_back(o + static_cast<int>(it.row()), o + static_cast<int>(it.col()), factor * it.value());
+    };
+    if (fe_matrices == FeAssembly::kAll) {
+      add(model.fe.mass, 1.0, &mt);
+      add(model.fe.stiffness, 1.0, &kt);
+      for (const FePart& part : model.fe.parts) {
+        if (part.mass) add(*part.mass, part.mass_factor, &mt);
+        if (part.stiffness) add(*part.stiffness, part.stiffness_factor, &kt);
+      }
     }
     for (std::size_t i = 0; i < model.fe.dofs.size(); ++i) {
       static const char* kDofNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
@@ -291,14 +307,30 @@ std::string DofWhere(const Model& model, const System& sys, int i, bool stiffnes
   return (file.empty() ? model.fe.origin : file) + ": entry (" + std::to_string(r) + ", " + std::to_string(r) + ")";
 }
 
-void CheckMassDiagonal(const Model& model, const System& sys) {
+// The DOFs without mass: FE DOFs whose whole row of M is zero (rotations of a lumped-mass export,
+// the internal DOFs of a condensed element) are normal input and returned; a body DOF without mass
+// or inertia, a negative diagonal, or a zero diagonal with off-diagonal mass is an error.
+std::vector<int> MasslessDofs(const Model& model, const System& sys) {
   const Eigen::VectorXd diag = sys.mass.diagonal();
-  for (int i = 0; i < diag.size(); ++i)
-    if (!(diag[i] > 0.0))
+  std::vector<int> massless;
+  std::vector<char> coupled(static_cast<std::size_t>(diag.size()), 0);
+  for (int c = 0; c < sys.mass.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(sys.mass, c); it; ++it)
+      if (it.row() != it.col() && it.value() != 0.0) coupled[static_cast<std::size_t>(it.row())] = 1;
+  for (int i = 0; i < diag.size(); ++i) {
+    if (diag[i] > 0.0) continue;
+    if (i < sys.body_dof_count || diag[i] < 0.0 || !std::isfinite(diag[i]))
       throw InputError(DofWhere(model, sys, i, false), "singular mass matrix: DOF " + sys.dof_names[i] +
                                                            " has no mass or inertia (diagonal entry " +
                                                            std::to_string(diag[i]) + "): expected a mass > 0 and " +
                                                            "inertia > 0 about every axis");
+    if (coupled[static_cast<std::size_t>(i)])
+      throw InputError(DofWhere(model, sys, i, false),
+                       "mass matrix not positive semi-definite: DOF " + sys.dof_names[i] +
+                           " has no mass on the diagonal but mass coupling to other DOFs");
+    massless.push_back(i);
+  }
+  return massless;
 }
 
 // The first DOF k at which the Cholesky factorisation of the dense SPD candidate `m` fails: the
@@ -322,8 +354,9 @@ Solution Solve(const Model& input, const SolveOptions& options) {
   const std::string origin = model.origin.empty() ? "model" : model.origin;
   System sys = Assemble(model, options);
   const int n = static_cast<int>(sys.mass.rows());
+  double sparse_scale = 0.0;
   if (n == 0) throw InputError(origin, "the model has no degrees of freedom (no [[body]] and no [fe])");
-  CheckMassDiagonal(model, sys);
+  const std::vector<int> massless = MasslessDofs(model, sys);
 
   Solution sol;
   sol.springs = sys.springs;
@@ -332,28 +365,69 @@ Solution Solve(const Model& input, const SolveOptions& options) {
   Eigen::MatrixXd vectors;
   if (n < options.sparse_threshold) {
     const Eigen::MatrixXd m(sys.mass), k(sys.stiffness);
-    Eigen::LLT<Eigen::MatrixXd> llt(m);
+    // Massless DOFs carry no inertia: condensing them statically (K_mm - K_mz K_zz^-1 K_zm on the
+    // DOFs with mass) is exact for every finite eigenvalue, and keeps M positive definite.
+    std::vector<int> keep;
+    {
+      std::vector<char> drop(static_cast<std::size_t>(n), 0);
+      for (int i : massless) drop[static_cast<std::size_t>(i)] = 1;
+      for (int i = 0; i < n; ++i)
+        if (!drop[static_cast<std::size_t>(i)]) keep.push_back(i);
+    }
+    if (keep.empty()) throw InputError(origin, "the model has no mass: every DOF of the [fe] mass matrix is zero");
+    Eigen::MatrixXd recover;  // massless DOFs = recover * DOFs with mass
+    Eigen::MatrixXd mk = m, kk = k;
+    if (!massless.empty()) {
+      const Eigen::MatrixXd kzz = k(massless, massless);
+      Eigen::LLT<Eigen::MatrixXd> lzz(kzz);
+      if (lzz.info() != Eigen::Success) {
+        const int z = std::max(0, FirstNonPositivePivot(kzz));
+        const int dof = massless[static_cast<std::size_t>(z)];
+        throw InputError(DofWhere(model, sys, dof, true),
+                         "DOF " + sys.dof_names[static_cast<std::size_t>(dof)] +
+                             " has no mass and nothing holds it: the stiffness of the massless DOFs is singular "
+                             "(a rotation no element connects?); expected every massless DOF to be held by stiffness");
+      }
+      recover = -lzz.solve(k(massless, keep));
+      kk = k(keep, keep) + k(keep, massless) * recover;
+      kk = 0.5 * (kk + kk.transpose()).eval();
+      mk = m(keep, keep);
+    }
+    Eigen::LLT<Eigen::MatrixXd> llt(mk);
     if (llt.info() != Eigen::Success) {
-      const int k = std::max(0, FirstNonPositivePivot(m));
-      throw InputError(DofWhere(model, sys, k, false),
-                       "singular mass matrix: M is not positive definite at DOF " + sys.dof_names[k] +
+      const int bad = keep[static_cast<std::size_t>(std::max(0, FirstNonPositivePivot(mk)))];
+      throw InputError(DofWhere(model, sys, bad, false),
+                       "singular mass matrix: M is not positive definite at DOF " + sys.dof_names[bad] +
                            " (a body with zero mass or inertia, products of inertia larger than the inertias, "
                            "or an FE mass matrix that is not positive definite)");
     }
-    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(k, m, Eigen::ComputeEigenvectors | Eigen::Ax_lBx);
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(kk, mk, Eigen::ComputeEigenvectors | Eigen::Ax_lBx);
     if (es.info() != Eigen::Success) throw InputError(origin, "eigenvalue solution failed");
     eigenvalues = es.eigenvalues();
-    vectors = es.eigenvectors();  // M-normalised by Eigen
+    if (massless.empty()) {
+      vectors = es.eigenvectors();  // M-normalised by Eigen
+    } else {
+      vectors.resize(n, eigenvalues.size());
+      vectors(keep, Eigen::all) = es.eigenvectors();
+      vectors(massless, Eigen::all) = recover * es.eigenvectors();
+    }
   } else {
     sol.sparse = true;
     const int wanted = options.max_modes > 0 ? options.max_modes : 20;
     const int nev = std::min(n - 1, wanted + 6);  // room for up to 6 rigid-body modes
     const int ncv = std::min(n, std::max(2 * nev + 1, nev + 20));
+    // Massless DOFs get a mass 1e-12 of the largest: their spurious modes lie far above the
+    // lowest ones the shift-invert iteration finds, whose change is of that order.
+    Eigen::SparseMatrix<double> mass = sys.mass;
+    if (!massless.empty()) {
+      const double tiny = 1e-12 * mass.diagonal().maxCoeff();
+      for (int i : massless) mass.coeffRef(i, i) = tiny;
+    }
     // Shift slightly below zero so K - sigma M is definite even with rigid-body modes.
-    const double scale = sys.stiffness.diagonal().sum() / sys.mass.diagonal().sum();
+    const double scale = sys.stiffness.diagonal().sum() / mass.diagonal().sum();
     const double sigma = -std::max(1.0, 1e-8 * scale);
-    LdltShiftInvert op(sys.stiffness, sys.mass);
-    Spectra::SparseSymMatProd<double> bop(sys.mass);
+    LdltShiftInvert op(sys.stiffness, mass);
+    Spectra::SparseSymMatProd<double> bop(mass);
     Spectra::SymGEigsShiftSolver<LdltShiftInvert, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert>
         solver(op, bop, nev, ncv, sigma);
     solver.init();
@@ -362,11 +436,14 @@ Solution Solve(const Model& input, const SolveOptions& options) {
       throw ConvergenceError(origin, "sparse eigenvalue solution did not converge");
     eigenvalues = solver.eigenvalues();
     vectors = solver.eigenvectors();
+    sparse_scale = scale;
   }
   const double lambda_max = eigenvalues.cwiseAbs().maxCoeff();
-  // The sparse path only sees the lowest eigenvalues, so only the absolute limit applies there.
+  // The sparse path only sees the lowest eigenvalues: its relative limit is to trace(K)/trace(M),
+  // a mean of all eigenvalues (round-off of a zero eigenvalue in a free-free FE model is of the
+  // order of 1e-16 of it).
   const double abs_limit = std::pow(kTwoPi * options.rigid_frequency_hz, 2);
-  const double rigid_limit = sol.sparse ? abs_limit : std::max(abs_limit, options.rigid_tolerance * lambda_max);
+  const double rigid_limit = std::max(abs_limit, options.rigid_tolerance * (sol.sparse ? sparse_scale : lambda_max));
   std::vector<int> elastic;
   for (int i = 0; i < eigenvalues.size(); ++i) {
     const double lam = eigenvalues[i];

@@ -45,6 +45,11 @@ std::map<std::string, std::uint64_t> HashTree(const fs::path& dir) {
   return out;
 }
 
+std::string Slurp(const fs::path& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 json Load(const fs::path& path) {
   std::ifstream in(path);
   EXPECT_TRUE(in.good()) << path;
@@ -150,40 +155,29 @@ TEST_F(GuidewayRun, RanksTheMountComplianceFirst) {
   ASSERT_FALSE(diagnosis["candidates"].empty());
   const json& best = diagnosis["candidates"][0];
   EXPECT_EQ(best["rank"], 1);
-  // Rank 1 holds the series compliance on the bearings, first; the only other effect it may add
-  // is the roving sensors' mass (4 × 11.2 g on the carriage at any time, within 25 %).
-  ASSERT_GE(best["effects"].size(), 1u);
+  // The project declares the test's 11.2 g roving accelerometers (sensor_mass): they load each
+  // set's points while it is measured and are no finding. Rank 1 is the mount compliance alone.
+  ASSERT_EQ(best["effects"].size(), 1u) << diagnosis["summary"];
   EXPECT_EQ(best["effects"][0]["kind"], "series_compliance");
   EXPECT_EQ(best["effects"][0]["target"], "bearings");
-  for (size_t i = 1; i < best["effects"].size(); ++i) {
-    ASSERT_EQ(best["effects"][i]["kind"], "added_mass");
-    const std::string target = best["effects"][i]["target"];
-    const double points = target == "all_points" ? 16.0 : 1.0 + std::count(target.begin(), target.end(), ',');
-    EXPECT_NEAR(best["effects"][i]["parameters"]["mass"].get<double>() * points, 4 * 0.0112, 0.25 * 4 * 0.0112);
-  }
+  EXPECT_GE(best["probability"].get<double>(), 0.9) << diagnosis["summary"];
+  for (const auto& e : diagnosis["effect_probabilities"]) EXPECT_NE(e["kind"], "added_mass") << e.dump();
   // The truth (truth/model.toml) is the air film in series with a Hertz ball joint at each pad
   // (E' = 58 GPa, R' = 8.29 mm). Fitted as a Hertz element with R' fixed at 1 mm, only E'·sqrt(R')
-  // is identifiable: E' = 58e9·sqrt(8.29) within 10 %. Fitted as a linear spring it behaves like
-  // ~15 N/um (make_sample.py's best single k for both setups), within 20 % (the roving sensors).
+  // is identifiable: E' = 58e9·sqrt(8.29); the chain reaches it to 0.2 %, 1 % is asserted.
   const std::string law = best["effects"][0]["law"];
-  const bool several = best["effects"].size() > 1;
-  if (law.find("hertz") != std::string::npos) {
-    const std::string key = several ? "series_compliance.modulus" : "modulus";
-    EXPECT_NEAR(best["parameters"][key].get<double>() / (58e9 * std::sqrt(8.29)), 1.0, 0.10) << best.dump();
-  } else {
-    const std::string key = several ? "series_compliance.k" : "k";
-    EXPECT_NEAR(best["parameters"][key].get<double>(), 15.4e6, 0.2 * 15.4e6) << best.dump();
-  }
-  // How sure: rank 1 may share its probability with the same effects on another point (the
-  // sensors' mass moves with the roving sets, so no single point is singled out), but the mount
-  // compliance itself, whichever candidate holds it, must be near certain.
-  auto effect_probability = [&](const std::string& kind, const std::string& target) {
-    for (const auto& e : diagnosis["effect_probabilities"])
-      if (e["kind"] == kind && e["target"] == target) return e["probability"].get<double>();
-    return 0.0;
-  };
-  EXPECT_GT(effect_probability("series_compliance", "bearings"), 0.95) << diagnosis["effect_probabilities"].dump();
-  if (best["effects"].size() > 1) EXPECT_GT(effect_probability("added_mass", "points:*"), 0.9);
+  ASSERT_NE(law.find("hertz"), std::string::npos) << law;
+  EXPECT_NEAR(best["parameters"]["modulus"].get<double>() / (58e9 * std::sqrt(8.29)), 1.0, 0.01) << best.dump();
+  // The first screen tells the story: the effect, its value with σ, the thesis's K_e per pad
+  // (2.8 and 1.7 N/µm, Tables 7.1, 7.2 and 8.1), the adequacy to the test's noise.
+  const std::string summary = Slurp(*out_ / "summary.txt");
+  EXPECT_NE(summary.find("Diagnosis: the model misses 1 effect"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("Hertz contact E' = 16"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("per spring of 'bearings' now: 2.8 N/µm at stud-5um, 1.72 N/µm at stud-9um"), std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("Adequate to the test's noise: yes"), std::string::npos) << summary;
+  EXPECT_EQ(summary.find("added_mass"), std::string::npos) << summary;
+  EXPECT_TRUE(best["noise_consistent"].get<bool>());
 }
 
 TEST_F(GuidewayRun, UpdatedModelAgreesWithBothSetups) {
@@ -194,8 +188,9 @@ TEST_F(GuidewayRun, UpdatedModelAgreesWithBothSetups) {
     // Before: the air film read at the stud setting is ~3x too stiff at 5 um (thesis Table 8.1,
     // scheme A 23 N/um against 2.8 N/um), so the agreement is far below 90 %.
     EXPECT_LT(before["summary"]["mean_agreement_pct"].get<double>(), 90.0) << test;
-    // After: the issue's acceptance figure.
-    EXPECT_GE(after["summary"]["mean_agreement_pct"].get<double>(), 98.0) << test;
+    // After: the issue's acceptance figure (issue 26: ≥ 99 % in both setups; the updated model is
+    // correlated bare, without the test's sensors, which cost it 0.9 %).
+    EXPECT_GE(after["summary"]["mean_agreement_pct"].get<double>(), 99.0) << test;
     // All five rigid-body modes of the carriage are paired with the updated model.
     EXPECT_GE(after["pairs"].size(), 5u) << test;
   }

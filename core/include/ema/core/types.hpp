@@ -116,6 +116,10 @@ struct FrfSet {
   Quantity output_quantity = Quantity::kAcceleration;  ///< accelerance by default
   double window_decay_rate = 0.0;      ///< 1/tau [1/s] of an exponential window the FRFs carry
   bool roving_hammer = false;          ///< rows measured by a moving hammer, fixed sensors (reciprocity)
+  /// Per output: the roving set (0-based) it was measured in — the impacts of one file that share
+  /// their response nodes; empty when unknown (a file from another tool). Roving sensors load the
+  /// article where and while their set is measured (diagnosis, refinement).
+  std::vector<int> output_sets;
   std::string force_unit = "N";
   std::string response_unit = "m/s^2";
 
@@ -146,6 +150,9 @@ struct Mode {
   double damping_ratio_std = kNaN;     ///< 1 sigma of damping_ratio
   Eigen::VectorXd shape_std;           ///< 1 sigma of |shape| per DOF (empty when unknown)
   bool unit_modal_mass = false;        ///< shape scaled to unit modal mass
+  /// Roving-sensor tests: the mode as each roving set saw it (its sensors load the article while
+  /// it is measured), in the order of the sets; frequency_hz is then their mean. Empty otherwise.
+  std::vector<double> set_frequency_hz, set_damping_ratio, set_frequency_std_hz;
 };
 
 /// A set of modes with the DOFs their shapes are given at.

@@ -57,6 +57,12 @@ struct FitOptions {
   /// their sigma still estimated at the PolyMAX poles).
   RefineMethod refine = RefineMethod::kMl;
   MlRefineOptions ml;
+  /// Roving-sensor tests (FRFs that know their roving sets): the ML refinement fits each set's FRFs
+  /// with that set's own poles — the same modes, shifted by the set's sensor masses — and reports
+  /// each mode as the mean over the sets with every set's frequency (Mode::set_frequency_hz). The
+  /// shapes are fitted with each set's poles. Falls back to one pole per mode for every FRF when a
+  /// set's refinement is not usable.
+  bool per_set_poles = true;
   SplitPoleOptions split_poles;  ///< automatic selection only
 
   /// True when the options a user sets are in range; else false with the violated condition in

@@ -28,7 +28,14 @@ struct FitData {
   FrfType frf_type = FrfType::kAccelerance;
   double window_decay_rate = 0.0;  ///< 1/tau, added to every estimated pole (algorithms.md §1.4)
   bool transposed = false;         ///< roles swapped by reciprocity (roving hammer)
+  /// Per output: the roving set it was measured in (FrfSet::output_sets); empty when unknown or
+  /// transposed. Each set's sensors load the article while it is measured, so each set sees every
+  /// mode at a slightly different frequency.
+  std::vector<int> output_set;
   std::vector<std::string> warnings;
+
+  /// The roving sets, in order of their ids (empty when unknown): the outputs of each.
+  std::vector<std::vector<int>> SetOutputs() const;
 
   int LineCount() const { return static_cast<int>(frequency_hz.size()); }
   int UsedLineCount() const { return static_cast<int>(line_weight.sum()); }
@@ -55,5 +62,8 @@ struct FitDataOptions {
 /// InputError: inconsistent references (h count/shape), no lines in the band, an FRF missing
 /// entirely, widespread NaN lines.
 FitData PrepareFitData(const FrfSet& frfs, const FitDataOptions& options, const std::string& source = "FRF set");
+
+/// The same data restricted to the given outputs (in that order): one roving set's FRFs.
+FitData SubsetOutputs(const FitData& data, const std::vector<int>& outputs);
 
 }  // namespace ema::curvefit

@@ -26,11 +26,20 @@ struct LsfdResult {
   std::vector<std::string> warnings; ///< e.g. driving-point residues of the wrong sign
 };
 
+/// Roving-sensor tests: per roving set, the outputs measured in it and the poles (lambda_fitted,
+/// one per mode) its FRFs are fitted with — the same modes, seen at each set's own frequency.
+struct SetPoles {
+  std::vector<std::vector<int>> outputs;
+  std::vector<std::vector<std::complex<double>>> lambda_fitted;
+};
+
 /// Fits the shapes phi_r of H_o = sum_r phi_or l_r^T/(jw - lambda_r) + c.c. + residuals, with the
 /// FRF-type factor (jw)^k so the unknowns are receptance residues (§1.9). Uses the fitted poles
 /// (with window damping) and reports the corrected ones. Shapes are scaled to unit modal mass
 /// where a driving point exists, otherwise to unit largest component.
+/// With `set_poles`, each set's outputs are fitted with that set's poles (the participation
+/// factors stay common, so the shapes of all sets are scaled alike).
 LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPole>& poles,
-                              const LsfdOptions& options = {});
+                              const LsfdOptions& options = {}, const SetPoles* set_poles = nullptr);
 
 }  // namespace ema::curvefit

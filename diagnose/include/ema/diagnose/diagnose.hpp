@@ -22,8 +22,20 @@ namespace ema::diagnose {
 
 /// The test modes of one setup ("" = the model's nominal operating points).
 struct SetupModes {
+  SetupModes() = default;
+  SetupModes(std::string setup_name, ModeSet test_modes) : setup(std::move(setup_name)), modes(std::move(test_modes)) {}
   std::string setup;
   ModeSet modes;
+  /// The test's own transducers (cli.md, added turn 3): `sensor_mass` kg at each measured node (one
+  /// triaxial accelerometer counts once) of a roving set, while that set was measured. The model's
+  /// prediction of this test carries them: each set is solved with its sensors, the frequencies
+  /// averaged over the sets (weighted by their measured DOFs) and each DOF's shape taken from the
+  /// set that measured it, scaled through the hammer DOF as the test's own residues are.
+  double sensor_mass = 0.0;
+  /// Node ids of each roving set; empty: every measured node carried its sensor throughout.
+  std::vector<std::vector<int>> roving_sets;
+  /// The hammer DOF (the shapes' common reference); node 0: unknown (sets aligned by sign).
+  Dof reference{0, 0};
 };
 
 /// How candidates are ranked. kEvidence (default): the Laplace approximation of the posterior
@@ -71,6 +83,12 @@ struct DiagnoseOptions {
   /// look-alikes (docs/diagnose.md), re-fitted and checked backward.
   bool swaps = true;
   int max_iterations = 30;
+  /// Models with at least this many DOFs (FE-sized) are screened and fitted through reduced
+  /// models (model/reduced.hpp: the nominal modes and each candidate's mode-shape sensitivity), the
+  /// best `exact_candidates` re-fitted on a basis centred at their values and reported from full
+  /// solves. 0: always full solves.
+  int reduced_model_min_dofs = 200;
+  int exact_candidates = 8;
   ProgressCallback progress;
 
   /// True when every option is in range; else false with the reason in *error (Ceres style).
@@ -85,8 +103,12 @@ struct FittedParameter {
   double value = kNaN;
   double sigma = kNaN;   ///< NaN when the posterior is singular
   double prior_sigma = kNaN;  ///< the prior's 1σ (relative, see docs/diagnose.md)
-  double lower = kNaN, upper = kNaN;
+  double lower = kNaN, upper = kNaN;   ///< the range searched (widened when a fit reached an end)
   bool at_bound = false;
+  /// How far the value lies from the model's nominal one, in σ of its prior (log-normal: ln-ratio
+  /// over σ; an unmodelled mass: mass over its σ). |z| > 3: far outside the stated uncertainty.
+  double prior_z = kNaN;
+  bool outside_prior = false;
 };
 
 /// One mode of one setup before/after.
@@ -98,6 +120,9 @@ struct ModeComparison {
   double model_frequency_hz = kNaN;
   double agreement_pct = kNaN;
   double mac = kNaN;
+  double sigma_hz = kNaN;                ///< the test frequency's 1σ the fit used
+  double frequency_misfit_sigma = kNaN;  ///< (model − test) / σ (unpaired: the penalty residual)
+  double shape_misfit_sigma = kNaN;      ///< (1 − MAC, blended for close modes) / shape σ
 };
 
 /// One outcome: the baseline ("none"), one effect, or several.
@@ -118,6 +143,16 @@ struct Candidate {
   int paired_modes = 0;
   std::vector<ModeComparison> modes;
   bool plausible = true;                    ///< false when a parameter ends at its far bound
+  /// The remaining frequency misfit per test mode in units of the test modes' own σ²:
+  /// Σ ((f_model − f_test)/σ)² / max(1, modes − parameters). cli.md, added turn 3.
+  double reduced_chi2 = kNaN;
+  /// True when that misfit is what the measurement noise explains (χ² below its 99 % quantile for
+  /// those degrees of freedom): the model then misses nothing these data can show.
+  bool noise_consistent = false;
+  /// Sentences an engineer should read: a value far outside its stated uncertainty ("the stiffness
+  /// of part 'clamp' is 50× lower than modelled: check it").
+  std::vector<std::string> flags;
+  bool reduced_model = false;               ///< misfit from a reduced model (FE-sized models, not among the best)
   std::vector<std::string> tied_with;       ///< candidates the data cannot tell apart
   std::string error;                        ///< non-empty when the candidate could not be evaluated
   int rank = 0;                             ///< 1 = most likely
@@ -150,11 +185,25 @@ std::string EffectWildcard(const std::string& target);
 /// The effect probabilities of ranked candidates, most probable first (≥ 1 % only).
 std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>& ranked);
 
+/// Candidates that are one reading on different members or points (the same kinds on the same
+/// groups): the data tell them apart only by which member or point, so reports show them as one
+/// row. `target` joins the wildcard targets ("joints/*", "points:*") with '+'.
+struct CandidateGroup {
+  std::string kind;
+  std::string target;
+  std::vector<int> ranks;   ///< ranks of its candidates, best first
+  double probability = 0.0; ///< summed over them
+};
+
+/// The groups of look-alike candidates, in the order of their best rank (failed candidates left out).
+std::vector<CandidateGroup> GroupCandidates(const std::vector<Candidate>& ranked);
+
 struct Diagnosis {
   Candidate baseline;                 ///< the model as given (also in `candidates` as "none")
   std::vector<Candidate> candidates;  ///< ranked, rank 1 first; includes "none"
   std::vector<Step> steps;            ///< baseline, then rank 1's effects added in turn
   std::vector<EffectProbability> effect_probabilities;  ///< per effect, most probable first
+  std::vector<CandidateGroup> groups;  ///< look-alike candidates folded into one row each
   std::string explanation;            ///< in words, for the user
   int residual_count = 0;
   int test_mode_count = 0;

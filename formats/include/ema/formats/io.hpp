@@ -43,7 +43,10 @@ void WriteFrfSet(const std::filesystem::path& path, const FrfSet& frfs, const Wr
 /// exactly what a later command reading the file gets (formats/src/stored_view.cpp).
 FrfSet StoredFrfSet(const FrfSet& frfs, const WriteOptions& options = {});
 
-/// Mode shapes (UFF 55) with geometry from datasets 15/2411 when the file holds them.
+/// Mode shapes (UFF 55) with geometry from datasets 15/2411 when the file holds them; or, for a
+/// file that starts with '{', MODES.json in `ema fit --json`'s layout (model-format.md, added turn
+/// 3): `shape` lists exactly the measured DOFs (the same in every mode; `value` [re, im] or a real
+/// number), `frequency_std_hz` the measured 1σ of the frequency; no geometry.
 ModeSet ReadModeSet(const std::filesystem::path& path);
 
 /// Writes 151 header, 15 geometry (when known) and one 55 complex-mode dataset per mode.

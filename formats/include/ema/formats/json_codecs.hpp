@@ -44,6 +44,15 @@ nlohmann::json FitModesJson(const curvefit::FitResult& fit, curvefit::RefineMeth
 
 /// The fitted modal model (curvefit.md "modal_model"): poles, residues per FRF in the measured
 /// orientation, residual terms, FRF type and band.
+/// The roving sets of a test as `ema fit --json` records them beside its modes: {"roving_sets":
+/// [[node, ...] per set], "reference": {"node", "dir"}} (each key only when known) — what the
+/// diagnosis needs to load each set's sensors where and while it was measured (cli.md, added turn 3).
+nlohmann::json TestSetsJson(const FrfSet& frfs);
+
+/// Reads what TestSetsJson wrote from a modes JSON (`ema fit --json` or another tool's file in its
+/// layout); false (outputs untouched) when it holds no roving sets.
+bool ReadTestSets(const nlohmann::json& modes_json, std::vector<std::vector<int>>* roving_sets, Dof* reference);
+
 nlohmann::json ModalModelJson(const curvefit::ModalModel& model);
 
 /// `ema fit --stabilisation` (without the CMIF/MMIF keys).

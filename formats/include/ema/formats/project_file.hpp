@@ -18,6 +18,10 @@ struct ProjectTest {
   std::string name;                            ///< folder name in OUT/ (defaults to the setup)
   std::vector<std::filesystem::path> time;     ///< time data files (roving sets), absolute
   std::optional<std::filesystem::path> frf;    ///< FRF file instead of time data (skips `ema frf`)
+  /// Mass of the transducer at each measured node, kg (one triaxial accelerometer counts once):
+  /// the test's own sensors, which the model's prediction of this test carries (cli.md, added
+  /// turn 3). 0: none declared.
+  double sensor_mass = 0.0;
 };
 
 struct Project {

@@ -6,10 +6,12 @@
 //  * series_compliance(group | group/member, law): every spring of the target gets `law` in
 //    series (a series chain is extended, so an air-film chain re-solves its equilibrium);
 //  * stiffness_scale(group | group/member, factor): linearised stiffness of the springs x factor;
+//    on an FE part target (part group, GROUP/PART, a part in no group) the parts' stiffness x factor;
 //  * operating_point(group | group/member, value): replaces the setting / gap / operating
 //    deflection or force of the target's non-linear laws;
 //  * added_mass("points:101,102" | "all_points", mass): a point mass `mass` at each test point;
-//  * mass_scale(body, factor): mass, inertia and products of the body x factor;
+//  * mass_scale(body, factor): mass, inertia and products of the body x factor; on an FE part
+//    target the parts' mass x factor;
 //  * ground_spring(body, k): three translational springs of stiffness k (X, Y, Z) from the body
 //    centre to ground, group "ground_spring".
 #pragma once
@@ -101,6 +103,11 @@ std::vector<Member> Members(const Model& model);
 /// The spring indices a spring-group target names: "GROUP" (every spring of the group) or
 /// "GROUP/MEMBER". Empty when nothing matches.
 std::vector<int> TargetSprings(const Model& model, const std::string& target);
+
+/// The FE part indices (Model::fe.parts) a part target names (model-format.md "FE models built
+/// from parts"): "GROUP" (every part of the group), "GROUP/NAME" (one member) or the name of a part
+/// in no group. Empty when nothing matches.
+std::vector<int> TargetParts(const Model& model, const std::string& target);
 
 /// The operating value of a spring's non-linear law (setting, gap, deflection or force); NaN for
 /// a linear law.

@@ -9,6 +9,7 @@
 #include <Eigen/SparseCore>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -185,7 +186,31 @@ struct Effect {
   int line = 0;
 };
 
-/// Imported finite-element matrices (symmetric; lower or full storage accepted).
+/// One part of an FE model (model-format.md "FE models built from parts"): the part's own
+/// contribution to the global stiffness (and mass), in the [fe] DOF order — a bolted-joint zone,
+/// a deck panel, a support. K = [fe].stiffness + Σ factor·part.stiffness, likewise M.
+struct FePart {
+  std::string name;                        ///< unique among parts
+  std::string group;                       ///< "" = a part in no group; else the group's member `name`
+  /// n × n (full storage), or null for none. Shared and never modified: copies of a model (one per
+  /// effect tried by the diagnosis) share the part matrices; effects change only the factors.
+  std::shared_ptr<const Eigen::SparseMatrix<double>> stiffness;
+  std::shared_ptr<const Eigen::SparseMatrix<double>> mass;
+  double stiffness_factor = 1.0;           ///< multiplies the stiffness (stiffness_scale effect)
+  double mass_factor = 1.0;                ///< multiplies the mass (mass_scale effect)
+  /// Relative 1σ of the stiffness, as 1σ of ln(factor) (model-format.md "Prior knowledge"); NaN: not given.
+  double uncertainty = std::numeric_limits<double>::quiet_NaN();
+  int line = 0;                            ///< source line of the [[fe.part]] block
+  std::string stiffness_file, mass_file;   ///< the matrices' files, for messages
+
+  bool HasMass() const { return mass != nullptr; }
+  bool HasStiffness() const { return stiffness != nullptr; }
+  /// How an effect names it: "GROUP/NAME" for a member of a group, "NAME" for a part in no group.
+  std::string Target() const { return group.empty() ? name : group + "/" + name; }
+};
+
+/// Imported finite-element matrices (symmetric; lower or full storage accepted). `mass` and
+/// `stiffness` may be 0 × 0 (none) when parts carry the rest; the size is the DOF map's.
 struct FeMatrices {
   Eigen::SparseMatrix<double> mass;
   Eigen::SparseMatrix<double> stiffness;
@@ -195,10 +220,12 @@ struct FeMatrices {
   };
   std::vector<DofEntry> dofs;                      ///< one per matrix row
   std::map<int, Eigen::Vector3d> node_positions;   ///< node id -> global position, m
+  std::vector<FePart> parts;                       ///< [[fe.part]] blocks, in file order
   std::string origin;                              ///< file names, for messages
   std::string mass_file, stiffness_file;           ///< the matrices' files, for messages naming an entry
 
   bool Empty() const { return dofs.empty(); }
+  int Size() const { return static_cast<int>(dofs.size()); }
 };
 
 /// The whole spatial model.

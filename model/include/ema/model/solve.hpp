@@ -77,8 +77,13 @@ struct Solution {
   std::vector<std::string> warnings;
 };
 
+/// What Assemble takes of the FE matrices ([fe] and its parts, scaled by their factors): all of
+/// them, or none — bodies, springs and point masses only, on the same DOFs (the reduced model of
+/// reduced.hpp adds the FE matrices through their projections).
+enum class FeAssembly { kAll, kNone };
+
 /// Assembles M and K at the operating point of `options.setup`.
-System Assemble(const Model& model, const SolveOptions& options = {});
+System Assemble(const Model& model, const SolveOptions& options = {}, FeAssembly fe = FeAssembly::kAll);
 
 /// Solves the model: applies pending effects, assembles, and solves the eigenproblem.
 Solution Solve(const Model& model, const SolveOptions& options = {});

@@ -1,0 +1,116 @@
+// A reduced (Ritz) model: many eigen-solutions of one FE-sized model under changes of its
+// parameters — what the diagnosis needs (hundreds of part factors, masses and springs tried, each
+// a full eigen-solution otherwise). docs/model.md "Reduced model".
+//
+// ReducedModelFactory is built once per model and setup: one full solve (its lowest modes Φ,
+// eigenvalues λ) and one factorisation of K − σM. For each change a reduced model must represent
+// (a part scaled, a point mass added, a spring softened: a "probe") it computes the static response
+// of the lowest modes to that change, (K − σM)⁻¹ (ΔK − λ_j ΔM) φ_j — the direction in which each
+// mode moves, the analytic mode-shape sensitivity up to the modal truncation — once, and keeps it.
+// A ReducedModel's basis V = [Φ, the responses of its probes], M-orthonormalised, carries every FE
+// matrix as its projection VᵀKV (each part's too), so a solve of a changed model is an
+// eigen-solution of a few dozen DOFs plus the projection of what the change touches. Its
+// eigenvalues are exact to first order in the change (their derivative φᵀ(ΔK − λΔM)φ is in the
+// basis) and Rayleigh–Ritz upper bounds beyond; the diagnosis re-centres a basis on the values it
+// fits and checks the results it reports with full solves.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ema/model/model.hpp"
+#include "ema/model/solve.hpp"
+
+namespace ema::model {
+
+struct ReducedModelOptions {
+  /// Elastic modes of the full solve kept in every basis.
+  int modes = 30;
+  /// Lowest elastic modes whose static response to each probe joins a basis.
+  int enriched_modes = 12;
+  /// A basis vector whose M-norm after orthogonalisation to the others falls below this share of
+  /// its own is dropped (it adds nothing the basis does not hold).
+  double drop_tolerance = 1e-8;
+
+  bool IsValid(std::string* why) const {
+    if (modes < 1) return *why = "modes must be >= 1", false;
+    if (enriched_modes < 0) return *why = "enriched_modes must be >= 0", false;
+    if (!(drop_tolerance > 0.0 && drop_tolerance < 1.0)) return *why = "drop_tolerance must lie in (0, 1)", false;
+    return true;
+  }
+};
+
+class ReducedModel;
+
+class ReducedModelFactory {
+ public:
+  /// Solves `base` (its pending effects applied) in full at `solve` (its setup; extra masses are
+  /// not part of the base: give them to ReducedModel::Solve) and factorises K − σM. Throws
+  /// InputError as Solve does, UsageError for invalid options.
+  ReducedModelFactory(const Model& base, const SolveOptions& solve, const ReducedModelOptions& options = {});
+  ~ReducedModelFactory();
+  ReducedModelFactory(const ReducedModelFactory&) = delete;
+  ReducedModelFactory& operator=(const ReducedModelFactory&) = delete;
+
+  /// The base without its [fe] mass and stiffness (parts keep their shared matrices): apply
+  /// effects to a copy of it — cheap at any size — and hand the result to ReducedModel::Solve.
+  const Model& Skeleton() const { return skeleton_; }
+  /// The full solution of the base (modes at the test points, full shapes).
+  const Solution& BaseSolution() const { return solution_; }
+
+  /// A reduced model whose basis holds the base's modes and the static responses to each probe
+  /// (a list of effects applied to Skeleton()); the responses are computed once per probe and
+  /// kept, keyed by `Describe` of its effects.
+  std::unique_ptr<ReducedModel> Make(const std::vector<std::vector<Effect>>& probes) const;
+
+  int DofCount() const;
+  int ModeCount() const { return static_cast<int>(lambda_.size()); }
+
+ private:
+  friend class ReducedModel;
+  struct Delta {
+    Eigen::SparseMatrix<double> stiffness, mass;
+  };
+  // ΔK, ΔM of `changed` (a skeleton with effects) against the base, FE parts included when `parts`.
+  Delta DeltaOf(const Model& changed, const SolveOptions& options, bool parts) const;
+  const Eigen::MatrixXd& Responses(const std::vector<Effect>& probe) const;
+
+  struct Factorisation;
+  Model skeleton_;
+  SolveOptions options_;
+  ReducedModelOptions reduced_options_;
+  Solution solution_;
+  System system_;                      ///< full K, M of the base
+  System rest_;                        ///< bodies, springs, point masses of the base (no FE matrices)
+  Eigen::VectorXd lambda_;             ///< eigenvalues of the kept elastic modes
+  double rigid_limit_ = 0.0;
+  std::unique_ptr<Factorisation> factorisation_;
+  mutable std::map<std::string, Eigen::MatrixXd> responses_;  ///< per probe, n × enriched_modes
+};
+
+class ReducedModel {
+ public:
+  /// The eigen-solution of `changed` (the factory's Skeleton() with effects applied) with the
+  /// extra masses of `options` (roving sensors), in the reduced basis: modes at the test points
+  /// (mass-normalised, damping from [damping]) and rigid-body frequencies; no full shapes, springs
+  /// or energy shares. Throws InputError for a stiffness that is not positive semi-definite.
+  Solution Solve(const Model& changed, const SolveOptions& options) const;
+
+  int BasisSize() const { return static_cast<int>(basis_.cols()); }
+
+ private:
+  friend class ReducedModelFactory;
+  explicit ReducedModel(const ReducedModelFactory* factory) : factory_(factory) {}
+
+  const ReducedModelFactory* factory_;
+  Eigen::MatrixXd basis_;              ///< n × b, M-orthonormal
+  Eigen::MatrixXd observed_basis_;     ///< observation × basis
+  Eigen::MatrixXd k0_, m0_;            ///< VᵀKV, VᵀMV of the base
+  std::vector<Eigen::MatrixXd> part_k_, part_m_;  ///< VᵀK_pV, VᵀM_pV per part (0 × 0 when none)
+};
+
+}  // namespace ema::model
