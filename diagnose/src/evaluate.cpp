@@ -95,6 +95,7 @@ Evaluation Evaluator::Evaluate(const std::vector<model::Effect>& effects) {
     so.setup = setups_[s].name;
     so.max_modes = max_modes_;
     so.extra_masses = sensors;
+    if (reduced_) so.sparse_threshold = options_.reduced_model_min_dofs;  // FE-sized: the lowest modes by shift-invert
     ++solves_;
     return model::Solve(m, so);
   });
@@ -116,10 +117,18 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
     return out;
   }
   const int test_modes = residual_count_ / 2;
+  // Only part factors changed (no spring, body or point mass): the reduced model skips assembling
+  // the rest again.
+  bool rest_changed = false;
+  for (const auto& e : effects)
+    if (!((e.kind == "stiffness_scale" || e.kind == "mass_scale") && model::TargetSprings(r.skeleton, e.target).empty() &&
+          !r.skeleton.FindBody(e.target) && !model::TargetParts(r.skeleton, e.target).empty()))
+      rest_changed = true;
   return Compare([&](std::size_t s, const std::vector<model::PointMass>& sensors) {
     model::SolveOptions so;
     so.setup = setups_[s].name;
     so.max_modes = max_modes_;
+    so.sparse_threshold = options_.reduced_model_min_dofs;
     auto& factory = r.factories[{s, centre_key}];
     if (!factory) {
       model::Model centred = base_;
@@ -134,7 +143,7 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
     if (!reduced) reduced = factory->Make(probes);
     ++reduced_solves_;
     so.extra_masses = sensors;
-    return reduced->Solve(changed, so);
+    return reduced->Solve(changed, so, rest_changed);
   });
 }
 

@@ -164,43 +164,76 @@ std::unique_ptr<ReducedModel> ReducedModelFactory::Make(const std::vector<std::v
   r->k0_ = 0.5 * (r->k0_ + r->k0_.transpose()).eval();
   r->m0_ = r->basis_.transpose() * mv.leftCols(kept);
   r->m0_ = 0.5 * (r->m0_ + r->m0_.transpose()).eval();
-  const int offset = system_.body_dof_count;
-  for (const FePart& p : skeleton_.fe.parts) {
-    r->part_k_.push_back(p.stiffness ? ProjectPart(*p.stiffness, r->basis_, offset) : Eigen::MatrixXd());
-    r->part_m_.push_back(p.mass ? ProjectPart(*p.mass, r->basis_, offset) : Eigen::MatrixXd());
+  r->part_k_.resize(skeleton_.fe.parts.size());
+  r->part_m_.resize(skeleton_.fe.parts.size());
+  r->projected_.assign(skeleton_.fe.parts.size(), 0);
+  for (const auto& probe : probes) {
+    Model changed = skeleton_;
+    for (const Effect& e : probe) changed = ApplyEffect(changed, e);
+    r->ProjectParts(changed);
   }
   r->observed_basis_ = system_.observation * r->basis_;
   return r;
 }
 
-Solution ReducedModel::Solve(const Model& changed, const SolveOptions& options) const {
+void ReducedModel::ProjectParts(const Model& changed) const {
+  const ReducedModelFactory& f = *factory_;
+  const int offset = f.system_.body_dof_count;
+  for (std::size_t p = 0; p < changed.fe.parts.size() && p < f.skeleton_.fe.parts.size(); ++p) {
+    const FePart& now = changed.fe.parts[p];
+    const FePart& was = f.skeleton_.fe.parts[p];
+    if (projected_[p] || (now.stiffness_factor == was.stiffness_factor && now.mass_factor == was.mass_factor)) continue;
+    if (now.stiffness) part_k_[p] = ProjectPart(*now.stiffness, basis_, offset);
+    if (now.mass) part_m_[p] = ProjectPart(*now.mass, basis_, offset);
+    projected_[p] = 1;
+  }
+}
+
+Solution ReducedModel::Solve(const Model& changed, const SolveOptions& options, bool rest_changed) const {
   const ReducedModelFactory& f = *factory_;
   const std::string origin = changed.origin.empty() ? "model" : changed.origin;
   Eigen::MatrixXd k = k0_, m = m0_;
+  bool mass_changed = false;
   // What is not an FE matrix (springs, bodies, point masses — sensors included): its difference
   // to the base, projected entry by entry.
-  const ReducedModelFactory::Delta rest = f.DeltaOf(changed, options, false);
-  AddProjected(rest.stiffness, basis_, &k);
-  AddProjected(rest.mass, basis_, &m);
+  if (rest_changed || !options.extra_masses.empty()) {
+    const ReducedModelFactory::Delta rest = f.DeltaOf(changed, options, false);
+    AddProjected(rest.stiffness, basis_, &k);
+    AddProjected(rest.mass, basis_, &m);
+    mass_changed = rest.mass.nonZeros() > 0;
+  }
+  ProjectParts(changed);
   for (std::size_t p = 0; p < changed.fe.parts.size() && p < f.skeleton_.fe.parts.size(); ++p) {
     const FePart& now = changed.fe.parts[p];
     const FePart& was = f.skeleton_.fe.parts[p];
     if (now.stiffness_factor != was.stiffness_factor && part_k_[p].size() > 0)
       k += (now.stiffness_factor - was.stiffness_factor) * part_k_[p];
     if (now.mass_factor != was.mass_factor && part_m_[p].size() > 0)
-      m += (now.mass_factor - was.mass_factor) * part_m_[p];
+      m += (now.mass_factor - was.mass_factor) * part_m_[p], mass_changed = true;
   }
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(k, m, Eigen::ComputeEigenvectors | Eigen::Ax_lBx);
-  if (es.info() != Eigen::Success)
-    throw InputError(origin, "the reduced eigenvalue solution failed (a mass that is not positive definite?)");
+  // The basis is M-orthonormal: with the mass unchanged the problem is a standard one.
+  Eigen::VectorXd eigenvalues;
+  Eigen::MatrixXd eigenvectors;
+  if (!mass_changed && (m0_ - Eigen::MatrixXd::Identity(m0_.rows(), m0_.cols())).cwiseAbs().maxCoeff() < 1e-10) {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(k);
+    if (es.info() != Eigen::Success) throw InputError(origin, "the reduced eigenvalue solution failed");
+    eigenvalues = es.eigenvalues();
+    eigenvectors = es.eigenvectors();
+  } else {
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(k, m, Eigen::ComputeEigenvectors | Eigen::Ax_lBx);
+    if (es.info() != Eigen::Success)
+      throw InputError(origin, "the reduced eigenvalue solution failed (a mass that is not positive definite?)");
+    eigenvalues = es.eigenvalues();
+    eigenvectors = es.eigenvectors();
+  }
   Solution sol;
   sol.modes.dofs = f.system_.observed_dofs;
   sol.modes.geometry = f.system_.geometry;
   sol.modes.source = (changed.name.empty() ? origin : changed.name) + (options.setup.empty() ? "" : " [" + options.setup + "]");
   sol.dof_names = {};
   int elastic = 0;
-  for (Eigen::Index i = 0; i < es.eigenvalues().size(); ++i) {
-    const double lam = es.eigenvalues()(i);
+  for (Eigen::Index i = 0; i < eigenvalues.size(); ++i) {
+    const double lam = eigenvalues(i);
     if (lam < -f.rigid_limit_)
       throw InputError(origin, "negative eigenvalue " + std::to_string(lam) +
                                    " (rad/s)^2: the changed stiffness is not positive semi-definite");
@@ -213,7 +246,7 @@ Solution ReducedModel::Solve(const Model& changed, const SolveOptions& options) 
     mode.frequency_hz = std::sqrt(lam) / kTwoPi;
     mode.damping_ratio = changed.damping.RatioOfMode(elastic);
     mode.pole = FrequencyAndDampingToPole(mode.frequency_hz, mode.damping_ratio);
-    mode.shape = (observed_basis_ * es.eigenvectors().col(i)).cast<std::complex<double>>();
+    mode.shape = (observed_basis_ * eigenvectors.col(i)).cast<std::complex<double>>();
     mode.mpc = 1.0;
     mode.mpd = 0.0;
     mode.unit_modal_mass = true;

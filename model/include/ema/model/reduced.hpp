@@ -98,7 +98,9 @@ class ReducedModel {
   /// extra masses of `options` (roving sensors), in the reduced basis: modes at the test points
   /// (mass-normalised, damping from [damping]) and rigid-body frequencies; no full shapes, springs
   /// or energy shares. Throws InputError for a stiffness that is not positive semi-definite.
-  Solution Solve(const Model& changed, const SolveOptions& options) const;
+  /// `rest_changed` false: the caller knows that only part factors changed and `options` adds no
+  /// extra mass (the bodies, springs and point masses are not assembled again).
+  Solution Solve(const Model& changed, const SolveOptions& options, bool rest_changed = true) const;
 
   int BasisSize() const { return static_cast<int>(basis_.cols()); }
 
@@ -110,7 +112,11 @@ class ReducedModel {
   Eigen::MatrixXd basis_;              ///< n × b, M-orthonormal
   Eigen::MatrixXd observed_basis_;     ///< observation × basis
   Eigen::MatrixXd k0_, m0_;            ///< VᵀKV, VᵀMV of the base
-  std::vector<Eigen::MatrixXd> part_k_, part_m_;  ///< VᵀK_pV, VᵀM_pV per part (0 × 0 when none)
+  /// VᵀK_pV, VᵀM_pV per part, projected when a solve first changes that part's factor (the probes'
+  /// parts at Make): most reduced models change two or three of hundreds of parts.
+  mutable std::vector<Eigen::MatrixXd> part_k_, part_m_;
+  mutable std::vector<char> projected_;
+  void ProjectParts(const Model& changed) const;
 };
 
 }  // namespace ema::model
