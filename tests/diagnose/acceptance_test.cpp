@@ -161,6 +161,65 @@ TEST_F(Acceptance, FeModelWithACompliantBoundarySpring) {
   CorrelatesFromElsewhere(Elsewhere("fe"), modes, "fe");
 }
 
+// Issue 26, "priors, not cliffs": a reading far outside the engineer's stated uncertainty stays a
+// candidate ranked by its evidence and is flagged in words — never hidden behind the end of a
+// searched range. A clamped FE bar (the bar's elements in [fe], the clamp a part of its own with a
+// stated uncertainty of 50 %) whose clamp is 50× softer than modelled.
+TEST_F(Acceptance, ClampFiftyTimesSofterThanModelledRanksFirstAndIsFlagged) {
+  const fs::path dir = kTmp / "clamped";
+  WriteBeam(dir);
+  // The clamp: node 1 held in uz (1e9 N/m) and ry (1e6 N m/rad, 140× the bar's EI/L), a part alone.
+  const int n = 18;
+  std::ostringstream clamp;
+  clamp << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " 2\n1 1 1e9\n2 2 1e6\n";
+  Write(dir / "fe" / "K_clamp.mtx", clamp.str());
+  std::string model = Slurp(dir / "beam.toml");
+  model = model.substr(0, model.find("[[spring]]"));  // no support springs: the clamp holds the bar
+  model += "[[fe.part]]\nname = \"clamp\"\nstiffness = \"fe/K_clamp.mtx\"\nuncertainty = 0.5\n\n";
+  for (int i = 1; i <= 9; ++i) model += "[[point]]\nid = " + std::to_string(100 + i) + "\nnode = " + std::to_string(i) + "\n\n";
+  const fs::path nominal = dir / "clamped.toml";
+  Write(nominal, model);
+  const fs::path truth = Truth(nominal, "clamp", "[[effect]]\nkind = \"stiffness_scale\"\ntarget = \"clamp\"\nfactor = 0.02\n");
+  const fs::path modes = test_chain::Chain(kTmp, truth, "", "clamp", BeamPlan(74), "10:1800");
+  const json d = test_chain::Diagnose(kTmp, nominal, {{"", modes}}, "clamp", "", Elsewhere("clamp"));
+  const json& first = d["candidates"][0];
+  ASSERT_EQ(first["effects"].size(), 1u) << d["summary"];
+  EXPECT_EQ(first["kind"], "stiffness_scale") << d["summary"];
+  EXPECT_EQ(first["target"], "clamp") << d["summary"];
+  EXPECT_NEAR(Parameter(first, "factor") / 0.02, 1.0, 0.10) << first.dump();
+  // Flagged, in words and in the JSON; no range end reached (the range widened where it had to).
+  ASSERT_EQ(first["flags"].size(), 1u) << first.dump();
+  EXPECT_NE(std::string(first["flags"][0]).find("the stiffness of part 'clamp' is 50× lower than modelled"),
+            std::string::npos)
+      << first["flags"][0];
+  EXPECT_FALSE(first.contains("at_bound")) << first.dump();
+  EXPECT_NE(std::string(d["summary"]).find("Check: the stiffness of part 'clamp'"), std::string::npos) << d["summary"];
+  EXPECT_GT(first["probability"].get<double>(), 0.9);
+  CorrelatesFromElsewhere(Elsewhere("clamp"), modes, "clamp");
+}
+
+// The same with a lumped article: the stack's ground mounts are rubber, 1/60 of their rating. One
+// effect, not two stacked on the same group to get past the end of a range.
+TEST_F(Acceptance, MountsSixtyTimesSofterThanRatedRankFirstAsOneEffect) {
+  const fs::path nominal = kTmp / "stack" / "stack.toml";
+  Write(nominal, StackToml());
+  const fs::path truth =
+      Truth(nominal, "rubber", "[[effect]]\nkind = \"stiffness_scale\"\ntarget = \"mounts\"\nfactor = 0.0166666667\n");
+  std::string plan = StackPlan(75);
+  plan.replace(plan.find("samples = 4096"), 14, "samples = 16384");  // 0.25 Hz lines for the 13–32 Hz modes
+  // The six modes of the base on its mounts (13–32 Hz, the top's are above 440 Hz).
+  const fs::path modes = test_chain::Chain(kTmp, truth, "", "rubber", plan, "5:100");
+  const json d = test_chain::Diagnose(kTmp, nominal, {{"", modes}}, "rubber", "", Elsewhere("rubber"));
+  const json& first = d["candidates"][0];
+  ASSERT_EQ(first["effects"].size(), 1u) << d["summary"];
+  EXPECT_EQ(first["kind"], "stiffness_scale") << d["summary"];
+  EXPECT_EQ(first["target"], "mounts") << d["summary"];
+  EXPECT_NEAR(Parameter(first, "factor") * 60.0, 1.0, 0.10) << first.dump();
+  ASSERT_EQ(first["flags"].size(), 1u) << first.dump();
+  EXPECT_NE(std::string(first["flags"][0]).find("is 60× lower than modelled"), std::string::npos) << first["flags"][0];
+  CorrelatesFromElsewhere(Elsewhere("rubber"), modes, "rubber");
+}
+
 TEST_F(Acceptance, WrongOperatingGapOnAirFilmsWithTwoLoadLiftCurves) {
   // Vertical pads: exponential W(h) inline; lateral pads: inverse-square W(h) from lateral.csv.
   // The film runs at 7.5 µm instead of the nominal 5 µm: both curves' stiffness changes, each
