@@ -413,7 +413,7 @@ Solution Solve(const Model& input, const SolveOptions& options) {
     }
   } else {
     sol.sparse = true;
-    const int wanted = options.max_modes > 0 ? options.max_modes : 20;
+    const int wanted = options.max_modes > 0 ? options.max_modes : 30;
     const int nev = std::min(n - 1, wanted + 6);  // room for up to 6 rigid-body modes
     const int ncv = std::min(n, std::max(2 * nev + 1, nev + 20));
     // Massless DOFs get a mass 1e-12 of the largest: their spurious modes lie far above the

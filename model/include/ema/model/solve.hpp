@@ -18,10 +18,11 @@ namespace ema::model {
 
 struct SolveOptions {
   std::string setup;                    ///< setup name; empty = the nominal operating points
-  int max_modes = 0;                    ///< elastic modes kept; 0 = all (dense) / 20 (sparse)
+  int max_modes = 0;                    ///< elastic modes kept; 0 = all (dense) / 30 (sparse)
   std::vector<PointMass> extra_masses;  ///< added for this solve only (roving sensors)
-  /// Models with at least this many DOF use the sparse shift-invert solver.
-  int sparse_threshold = 10000;
+  /// Models with at least this many DOF use the sparse shift-invert solver (the lowest modes only:
+  /// a dense solution of every mode of a 1000-DOF mesh takes seconds and is never used).
+  int sparse_threshold = 1000;
   /// Rigid-body (zero) modes: eigenvalues below rigid_tolerance x the largest |eigenvalue|
   /// (dense path: round-off of a zero eigenvalue is about 1e-16 of the largest), or below
   /// (2 pi rigid_frequency_hz)^2.
