@@ -377,6 +377,10 @@ json DiagnosisJson(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions
   out["effect_probabilities"] = json::array();
   for (const auto& e : d.effect_probabilities)
     out["effect_probabilities"].push_back({{"kind", e.kind}, {"target", e.target}, {"probability", e.probability}});
+  // Look-alike candidates folded into one row each (the same reading on another member or point).
+  out["groups"] = json::array();
+  for (const auto& g : d.groups)
+    out["groups"].push_back({{"kind", g.kind}, {"target", g.target}, {"ranks", g.ranks}, {"probability", g.probability}});
   out["steps"] = json::array();
   for (const auto& st : d.steps)
     out["steps"].push_back({{"added", st.added},
