@@ -201,9 +201,9 @@ std::vector<TimeRecord> app::RunSimulateStage(const SimulateConfig& config, cons
     // every mode of the mesh (the truncated ones add a quasi-static term of order (f / f_r)² to the
     // records, below 1/16 of the band's top in relative terms; docs/plan-format.md).
     const int model_dofs = 6 * static_cast<int>(m.bodies.size()) + m.fe.Size();
-    if (model_dofs > 300) {
+    if (model_dofs > 120) {
       const double cutoff_hz = 2.0 * plan.hammer.sample_rate_hz;
-      so.sparse_threshold = 300;
+      so.sparse_threshold = 120;
       for (so.max_modes = 40;; so.max_modes *= 2) {
         sol = model::Solve(m, so);
         const bool all = static_cast<int>(sol.modes.modes.size()) < so.max_modes || so.max_modes >= model_dofs / 2;

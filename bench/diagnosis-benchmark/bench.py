@@ -61,7 +61,8 @@ def choose_band(frequencies, family, damping):
     first six), the band edges half-way to the next mode, and a frequency line spacing of at
     most the lowest mode's damping times its frequency (two lines in its half-power band)."""
     f = sorted(x for x in frequencies if x > 1.0)
-    keep = [x for x in f if x < 2000.0] if family != "fe" else [x for x in f if x < 2500.0][:6]
+    keep = ([x for x in f if x < 2000.0] if family not in ("fe", "parts")
+            else [x for x in f if x < 2500.0][:6 if family == "fe" else 8])
     if len(keep) < 2:
         keep = f[:2]
     lo = 0.75 * keep[0]

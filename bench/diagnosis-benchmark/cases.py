@@ -13,6 +13,13 @@ Three families:
             on mounts, tested in two stud settings (two [[setup]]s, two tests).
   fe        a beam from Matrix Market M/K (Euler-Bernoulli, uz and ry per node) on 2-3
             boundary springs of different stiffness.
+  parts     an FE model built from parts ([[fe.part]], model-format.md): a two-girder footbridge
+            frame of 3D beam elements (6 DOFs per node, lumped mass with massless rotations), its
+            girder zones, cross beams, bearings and deck plate each a part, in groups.
+
+One case in ten with a stiffness effect draws it far outside what the model states, beyond the
+ranges the diagnosis searched before (a factor 5e-4..0.015: a joint nearly gone), some of them
+beyond its default range (1e-3), so the range must widen.
 
 Only the standard library: the files follow docs/plan-format.md and the model-format contract.
 """
@@ -22,8 +29,9 @@ import os
 import random
 
 NOISE_LEVELS = (0.005, 0.02, 0.05)
-FAMILIES = ("stack", "carriage", "fe")
-# Effect count by (index // 9) % 5: one case in five has no hidden effect.
+FAMILIES = ("stack", "carriage", "fe", "parts")
+# Family by index % 4, noise by (index // 4) % 3, effect count by (index // 12) % 5: one case in
+# five has no hidden effect.
 EFFECT_COUNTS = (0, 1, 1, 2, 2)
 
 
@@ -292,7 +300,119 @@ def build_fe(rng, files):
     return m, [None]
 
 
-BUILDERS = {"stack": build_stack, "carriage": build_carriage, "fe": build_fe}
+# ---------------------------------------------------------------- parts (FE model built from parts)
+
+def _beam_element(e_mod, g_mod, area, iy, iz, j, length):
+    """12 x 12 stiffness of a 3D Euler-Bernoulli beam along its local x (u v w rx ry rz per end)."""
+    k = [[0.0] * 12 for _ in range(12)]
+    ea, gj = e_mod * area / length, g_mod * j / length
+    for a, b, v in ((0, 0, ea), (6, 6, ea), (0, 6, -ea), (6, 0, -ea), (3, 3, gj), (9, 9, gj), (3, 9, -gj), (9, 3, -gj)):
+        k[a][b] += v
+
+    def bend(v, t, ei, sign):
+        c1, c2, c3, c4 = 12 * ei / length ** 3, 6 * ei / length ** 2, 4 * ei / length, 2 * ei / length
+        v1, t1, v2, t2 = v, t, v + 6, t + 6
+        for a, b, x in ((v1, v1, c1), (v2, v2, c1), (v1, v2, -c1), (v2, v1, -c1),
+                        (v1, t1, sign * c2), (t1, v1, sign * c2), (v1, t2, sign * c2), (t2, v1, sign * c2),
+                        (v2, t1, -sign * c2), (t1, v2, -sign * c2), (v2, t2, -sign * c2), (t2, v2, -sign * c2),
+                        (t1, t1, c3), (t2, t2, c3), (t1, t2, c4), (t2, t1, c4)):
+            k[a][b] += x
+
+    bend(1, 5, e_mod * iz, 1.0)
+    bend(2, 4, e_mod * iy, -1.0)
+    return k
+
+
+def _rotate(k, axis):
+    """K in global axes for an element along `axis` (local z up where possible): T^T K T."""
+    n = math.sqrt(sum(c * c for c in axis))
+    x = [c / n for c in axis]
+    up = [0.0, 1.0, 0.0] if abs(x[2]) > 0.9 else [0.0, 0.0, 1.0]
+    y = [up[1] * x[2] - up[2] * x[1], up[2] * x[0] - up[0] * x[2], up[0] * x[1] - up[1] * x[0]]
+    ny = math.sqrt(sum(c * c for c in y))
+    y = [c / ny for c in y]
+    z = [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]]
+    r = [x, y, z]
+    t = [[0.0] * 12 for _ in range(12)]
+    for blk in range(4):
+        for a in range(3):
+            for b in range(3):
+                t[3 * blk + a][3 * blk + b] = r[a][b]
+    kt = [[sum(k[a][c] * t[c][b] for c in range(12)) for b in range(12)] for a in range(12)]
+    return [[sum(t[c][a] * kt[c][b] for c in range(12)) for b in range(12)] for a in range(12)]
+
+
+def build_parts(rng, files):
+    """A two-girder footbridge frame built from parts: 3D beams, lumped mass, massless rotations."""
+    segments = rng.choice((12, 16, 20))
+    zones = 4
+    length, width = rng.uniform(5.0, 10.0), rng.uniform(1.2, 2.5)
+    e_mod, g_mod, rho = 2.1e11, 8.1e10, 7850.0
+    scale = length / 20.0
+    girder = (0.012 * scale, 4.0e-4 * scale ** 2, 6.0e-5 * scale, 2.0e-6 * scale)
+    cross = (0.004, 2.0e-5, 1.0e-5, 5.0e-7)
+    deck = (0.002, 3.0e-6 * rng.uniform(0.5, 2.0), 2.0e-5, 1.0e-6)
+    per = segments + 1
+    n = 12 * per
+    dx = length / segments
+    pos = lambda g, i: (dx * i, 0.0 if g == 0 else width, 0.0)
+    dof = lambda g, i, d: 6 * (g * per + i) + d
+    parts, order, mass = {}, [], [0.0] * n
+
+    def element(name, ga, ia, gb, ib, section, density):
+        pa, pb = pos(ga, ia), pos(gb, ib)
+        axis = [pb[c] - pa[c] for c in range(3)]
+        le = math.sqrt(sum(c * c for c in axis))
+        k = _rotate(_beam_element(e_mod, g_mod, *section, le), axis)
+        idx = [dof(ga, ia, d) for d in range(6)] + [dof(gb, ib, d) for d in range(6)]
+        if name not in parts:
+            parts[name] = {}
+            order.append(name)
+        entries = parts[name]
+        for a in range(12):
+            for b in range(12):
+                r, c = idx[a], idx[b]
+                if r >= c and k[a][b] != 0.0:
+                    entries[(r, c)] = entries.get((r, c), 0.0) + k[a][b]
+        m_half = density * section[0] * le / 2.0
+        for d in range(3):
+            mass[idx[d]] += m_half
+            mass[idx[6 + d]] += m_half
+
+    for g in range(2):
+        for i in range(segments):
+            element(f"G{min(zones - 1, i * zones // segments) + 1}", g, i, g, i + 1, girder, rho)
+    cross_every = segments // 4
+    for i in range(0, segments + 1, cross_every):
+        element(f"X{min(zones // 2 - 1, i * (zones // 2) // (segments + 1)) + 1}", 0, i, 1, i, cross, rho)
+        element("deck", 0, i, 1, i, deck, 0.0)
+    bearing_k = rng.uniform(2e8, 8e8)
+    for b, (g, i) in enumerate(((0, 0), (1, 0), (0, segments), (1, segments)), start=1):
+        parts[f"B{b}"] = {(dof(g, i, d), dof(g, i, d)): bearing_k * rng.uniform(0.7, 1.3) for d in range(3)}
+        order.append(f"B{b}")
+    files["fe/M.mtx"] = write_mtx(n, {(r, r): v for r, v in enumerate(mass) if v})
+    fe = '[fe]\nmass = "fe/M.mtx"\ndofs = "fe/dofs.csv"\nnodes = "fe/nodes.csv"\n\n'
+    m = ModelText("random footbridge frame built from parts", rng.uniform(0.005, 0.015))
+    m.parts = []
+    for name in order:
+        files[f"fe/K_{name}.mtx"] = write_mtx(n, parts[name])
+        group = {"G": "girders", "X": "cross", "B": "bearings"}.get(name[0]) if name != "deck" else None
+        fe += f'[[fe.part]]\nname = "{name}"\n' + (f'group = "{group}"\n' if group else "")
+        fe += f'stiffness = "fe/K_{name}.mtx"\nuncertainty = {fmt(rng.choice((0.3, 0.5)))}\n\n'
+        m.parts.append((name, group))
+    m.extra = fe
+    files["fe/dofs.csv"] = "node,dof\n" + "".join(f"{1000 * (g + 1) + i},{d + 1}\n"
+                                                   for g in range(2) for i in range(per) for d in range(6))
+    files["fe/nodes.csv"] = "node,x,y,z\n" + "".join(f"{1000 * (g + 1) + i},{pos(g, i)[0]!r},{pos(g, i)[1]!r},0\n"
+                                                     for g in range(2) for i in range(per))
+    m.fe_mass = sum(mass[dof(g, i, 2)] for g in range(2) for i in range(per))
+    for g in range(2):
+        for i in range(1, segments, max(1, segments // 6)):
+            m.point(1000 * (g + 1) + i, node=1000 * (g + 1) + i)
+    return m, [None]
+
+
+BUILDERS = {"stack": build_stack, "carriage": build_carriage, "fe": build_fe, "parts": build_parts}
 
 
 # ---------------------------------------------------------------- effects
@@ -323,6 +443,14 @@ def effect_choices(family, m):
             ks = [s["k"] for s in springs if s["member"] == mem]
             if len(set(ks)) > 1:
                 choices.append(("series_compliance", f"{g}/{mem}"))
+    # FE parts: each group, each member of a group, each part in no group.
+    for name, group in getattr(m, "parts", []):
+        if group is None:
+            choices.append(("stiffness_scale", name))
+        else:
+            if ("stiffness_scale", group) not in choices:
+                choices.append(("stiffness_scale", group))
+            choices.append(("stiffness_scale", f"{group}/{name}"))
     choices.append(("added_mass", "all_points"))
     for p in m.points:
         choices.append(("added_mass", f"points:{p['id']}"))
@@ -380,12 +508,12 @@ def draw_parameter(rng, kind, target, m, mean_k, fe_mass):
 def make_case(index, seed):
     """The case: files to write (relative path -> text), the truth and the test plans."""
     rng = random.Random(f"diagnosis-benchmark:{seed}:{index}")
-    family = FAMILIES[index % 3]
-    noise = NOISE_LEVELS[(index // 3) % 3]
-    n_effects = EFFECT_COUNTS[(index // 9) % 5]
+    family = FAMILIES[index % len(FAMILIES)]
+    noise = NOISE_LEVELS[(index // len(FAMILIES)) % 3]
+    n_effects = EFFECT_COUNTS[(index // (3 * len(FAMILIES))) % 5]
     files = {}
     m, setups = BUILDERS[family](rng, files)
-    fe_mass = 0.0
+    fe_mass = getattr(m, "fe_mass", 0.0)
     if family == "fe":
         # The FE beam's mass from its M matrix: translational share (consistent matrix ~ whole).
         fe_mass = sum(v for (r, c), v in _parse_mtx(files["fe/M.mtx"]).items() if r == c and r % 2 == 0)
@@ -412,10 +540,10 @@ def make_case(index, seed):
             mean_k = sum(ks) / len(ks)
         else:
             ks_all = [s["k"] for s in m.springs if s["k"]]
-            mean_k = sum(ks_all) / len(ks_all)
+            mean_k = sum(ks_all) / len(ks_all) if ks_all else 1.0
         if e["kind"] == "ground_spring":
             ks_all = [s["k"] for s in m.springs if s["k"]]
-            mean_k = sum(ks_all) / len(ks_all)
+            mean_k = sum(ks_all) / len(ks_all) if ks_all else 1.0
         if e["kind"] == "mass_scale":
             # The engineer's model says the body's mass is a CAD estimate (10-15 %): the hidden
             # error lies within two of its σ, as a Bayesian benchmark requires.
@@ -423,6 +551,12 @@ def make_case(index, seed):
                 if b["name"] == e["target"]:
                     b["uncertainty"] = rng.choice((0.1, 0.15))
         params, line = draw_parameter(rng, e["kind"], e["target"], m, mean_k, fe_mass)
+        if e["kind"] == "stiffness_scale" and "/" in e["target"] and index % 10 == 7:
+            # Far outside what the model states (and beyond the ranges searched before): a joint
+            # nearly gone. Some lie below the default range's end, 1e-3, which must then widen.
+            v = log_uniform(rng, 5e-4, 0.015)
+            params, line = {"factor": v}, f"factor = {fmt(v)}"
+            e["outside_range"] = True
         e["parameters"] = params
         blocks.append(f'[[effect]]\nkind = "{e["kind"]}"\ntarget = "{e["target"]}"\n{line}\n\n')
     # The test plan: references, which points carry (triaxial) sensors, their mass, sets.
@@ -457,6 +591,14 @@ def draw_plan(rng, family, m, noise, seed, index):
         references = [f"{r}+Z" for r in sorted(rng.sample(inner, rng.choice((1, 2))))]
         sets = [[f"{p}+Z" for p in sensor_points]]
         sensor_mass = log_uniform(rng, 0.002, 0.015)
+    elif family == "parts":
+        ids = [p["id"] for p in m.points]
+        sensor_points = sorted(rng.sample(ids, rng.randint(max(6, len(ids) - 4), len(ids))))
+        # The deck hammered vertically off mid-span and laterally at another point.
+        references = [f"{rng.choice(ids)}+Z", f"{rng.choice(ids)}+Y"]
+        sets = ([[f"{p}{d}" for p in sensor_points for d in ("+X", "+Y", "+Z")]] if rng.random() < 0.5
+                else [[f"{p}{d}" for p in sensor_points for d in ("+X", "+Y")], [f"{p}+Z" for p in sensor_points]])
+        sensor_mass = log_uniform(rng, 0.01, 0.1)
     else:
         by_body = {}
         for p in m.points:

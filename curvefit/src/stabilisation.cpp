@@ -235,7 +235,26 @@ std::vector<SelectedPole> SelectPolesAuto(const StabilisationDiagram& diagram, c
     s.frequency_spread_hz = StdDev(f);
     s.damping_spread = StdDev(z);
     s.cluster_size = static_cast<int>(per_order.size());
+    s.first_order = orders.front();
+    s.last_order = orders.back();
     selected.push_back(std::move(s));
+  }
+  // One column that drifted in frequency and was cut in two: clusters within 1 % whose orders do
+  // not overlap (one ends where the other begins). The one that reaches the higher orders — the
+  // converged end of the column — stands for it.
+  std::sort(selected.begin(), selected.end(),
+            [](const SelectedPole& a, const SelectedPole& b) { return a.last_order > b.last_order; });
+  {
+    std::vector<SelectedPole> kept;
+    for (auto& s : selected) {
+      bool earlier_part = false;
+      for (const auto& k : kept)
+        earlier_part = earlier_part ||
+                       (std::abs(s.pole.frequency_hz - k.pole.frequency_hz) < 0.01 * k.pole.frequency_hz &&
+                        s.last_order < k.first_order + (k.last_order - k.first_order) / 5);
+      if (!earlier_part) kept.push_back(std::move(s));
+    }
+    selected = std::move(kept);
   }
   // Two kept clusters of one mode (a column that drifted): same frequency within the cut-off and
   // the same vector; keep the larger. Close modes with different vectors are both kept.

@@ -158,6 +158,19 @@ void Polish(detail::Problem* p, std::vector<detail::Fit>* fits, const DiagnoseOp
     if ((*fits)[i].ok && !(*fits)[i].atoms.empty()) order.push_back(i);
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return (*fits)[a].score < (*fits)[b].score; });
   if (static_cast<int>(order.size()) > options.exact_candidates) order.resize(options.exact_candidates);
+  // Every fitted subset of those too: whether an effect pays for itself is decided against the
+  // same set without it, and both must be judged by full solves (a reduced model far from its
+  // centre can make the smaller set look worse than it is).
+  for (size_t k = 0, top = order.size(); k < top; ++k) {
+    const std::vector<int>& big = (*fits)[order[k]].atoms;
+    for (size_t i = 0; i < fits->size(); ++i) {
+      const std::vector<int>& small = (*fits)[i].atoms;
+      if (!(*fits)[i].ok || small.empty() || small.size() >= big.size() ||
+          std::find(order.begin(), order.end(), i) != order.end())
+        continue;
+      if (std::includes(big.begin(), big.end(), small.begin(), small.end())) order.push_back(i);
+    }
+  }
   for (size_t i : order) {
     detail::Fit& f = (*fits)[i];
     ReportProgress(options.progress, 0.95, "checking " + std::to_string(f.atoms.size()) + " effect(s) with full solves");

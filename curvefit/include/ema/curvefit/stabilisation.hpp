@@ -30,6 +30,7 @@ struct SelectedPole {
   double frequency_spread_hz = 0.0;  ///< std. dev. of f over the cluster (one pole per order)
   double damping_spread = 0.0;       ///< std. dev. of zeta over the cluster
   int cluster_size = 1;              ///< orders the cluster spans
+  int first_order = 0, last_order = 0;  ///< the lowest and highest order of its cluster (0: not from one)
 };
 
 struct AutoSelectOptions {
@@ -42,7 +43,8 @@ struct AutoSelectOptions {
 };
 
 /// Fully automatic selection: hierarchical (average-linkage) clustering of the stable poles
-/// ('s'; 'd' when there are no stable vectors) across orders; clusters persisting over a wide
+/// ('s'; 'd' when there are no stable vectors) across orders; a column cut in two by a frequency
+/// drift counts once (its upper part); clusters persisting over a wide
 /// span of orders are kept; representative = the cluster medoid. Sorted by frequency.
 std::vector<SelectedPole> SelectPolesAuto(const StabilisationDiagram& diagram, const AutoSelectOptions& options = {});
 
