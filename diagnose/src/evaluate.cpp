@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <deque>
 
 #include "ema/core/error.hpp"
 #include "ema/correlation/correlate.hpp"
@@ -62,6 +63,10 @@ struct Evaluator::Reduced {
   model::Model skeleton;  // the base without its [fe] matrices: effects are applied to copies of it
   std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModelFactory>> factories;
   std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModel>> models;
+  /// Reduced models in order of last use: at most kKept stay (each holds n × b doubles; a diagnosis
+  /// visits hundreds of sets, mostly in turn).
+  std::deque<std::pair<std::size_t, std::string>> recent;
+  static constexpr std::size_t kKept = 24;
 };
 
 Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options,
@@ -139,8 +144,17 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
       factory = std::make_unique<model::ReducedModelFactory>(centred, so, ro);
       ++solves_;
     }
-    auto& reduced = r.models[{s, centre_key + "|" + key}];
+    const std::pair<std::size_t, std::string> model_key{s, centre_key + "|" + key};
+    auto& reduced = r.models[model_key];
     if (!reduced) reduced = factory->Make(probes);
+    if (r.recent.empty() || r.recent.back() != model_key) {
+      std::erase(r.recent, model_key);
+      r.recent.push_back(model_key);
+      while (r.recent.size() > Reduced::kKept) {
+        r.models.erase(r.recent.front());
+        r.recent.pop_front();
+      }
+    }
     ++reduced_solves_;
     so.extra_masses = sensors;
     return reduced->Solve(changed, so, rest_changed);

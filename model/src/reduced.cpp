@@ -3,6 +3,7 @@
 #include "ema/model/reduced.hpp"
 
 #include <Eigen/Dense>
+#include <Eigen/QR>
 #include <Eigen/SparseCholesky>
 #include <cmath>
 #include <cstdio>
@@ -38,11 +39,18 @@ void AddProjected(const Eigen::SparseMatrix<double>& d, const Eigen::MatrixXd& v
       if (it.value() != 0.0) out->noalias() += it.value() * v.row(it.row()).transpose() * v.row(it.col());
 }
 
-// Vᵀ A V for a part matrix A on the FE rows of V.
-Eigen::MatrixXd ProjectPart(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& v, int offset) {
-  const auto fe = v.middleRows(offset, a.rows());
-  const Eigen::MatrixXd av = a * fe;
-  Eigen::MatrixXd out = fe.transpose() * av;
+// Vᵀ A V for a part matrix A (FE-sized, its entries on `rows` of the system only): the part's
+// rows of V, not all of them — a joint zone touches a few dozen of the model's DOFs.
+Eigen::MatrixXd ProjectPart(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& v, int offset,
+                            const std::vector<int>& rows) {
+  std::vector<int> local(static_cast<size_t>(a.rows()), -1);
+  for (size_t k = 0; k < rows.size(); ++k) local[static_cast<size_t>(rows[k] - offset)] = static_cast<int>(k);
+  const Eigen::MatrixXd vr = v(rows, Eigen::all);
+  Eigen::MatrixXd av = Eigen::MatrixXd::Zero(vr.rows(), vr.cols());
+  for (int c = 0; c < a.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it)
+      av.row(local[static_cast<size_t>(it.row())]) += it.value() * vr.row(local[static_cast<size_t>(it.col())]);
+  Eigen::MatrixXd out = vr.transpose() * av;
   return 0.5 * (out + out.transpose());
 }
 
@@ -75,6 +83,8 @@ ReducedModelFactory::ReducedModelFactory(const Model& input, const SolveOptions&
   factorisation_->ldlt.compute(shifted);
   if (factorisation_->ldlt.info() != Eigen::Success)
     throw InputError(origin, "factorisation of K - sigma M failed (the reduced model of the diagnosis needs it)");
+  mass_modes_ = system_.mass * solution_.full_shapes;
+  part_rows_.resize(base.fe.parts.size());
   skeleton_ = base;
   skeleton_.effects.clear();
   skeleton_.fe.mass.resize(0, 0);
@@ -115,6 +125,33 @@ const Eigen::MatrixXd& ReducedModelFactory::Responses(const std::vector<Effect>&
   for (const Effect& e : probe) changed = ApplyEffect(changed, e);
   const Delta d = DeltaOf(changed, options_, true);
   const auto q = std::min<Eigen::Index>(reduced_options_.enriched_modes, lambda_.size());
+  // A change confined to a few DOFs (a support, a bolted joint, a point mass): the static responses
+  // to unit loads on those DOFs span every mode's change, whatever its size (the attachment modes
+  // of component-mode synthesis) — exact in the static limit, where the modal responses below are
+  // only first and second order in the change.
+  std::vector<int> rows;
+  {
+    std::vector<char> touched(static_cast<size_t>(DofCount()), 0);
+    for (const auto* a : {&d.stiffness, &d.mass})
+      for (int c = 0; c < a->outerSize(); ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(*a, c); it; ++it)
+          if (it.value() != 0.0) touched[static_cast<size_t>(it.row())] = 1;
+    for (int i = 0; i < DofCount(); ++i)
+      if (touched[static_cast<size_t>(i)]) rows.push_back(i);
+  }
+  if (!rows.empty() && static_cast<Eigen::Index>(rows.size()) <= std::max<Eigen::Index>(24, 2 * q)) {
+    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(DofCount(), static_cast<Eigen::Index>(rows.size()));
+    Eigen::VectorXd unit = Eigen::VectorXd::Zero(DofCount());
+    for (size_t k = 0; k < rows.size(); ++k) {
+      unit(rows[k]) = 1.0;
+      w.col(static_cast<Eigen::Index>(k)) = factorisation_->ldlt.solve(unit);
+      unit(rows[k]) = 0.0;
+    }
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(w);
+    qr.setThreshold(1e-10);
+    Eigen::MatrixXd basis = qr.householderQ() * Eigen::MatrixXd::Identity(w.rows(), qr.rank());
+    return responses_.emplace(key, std::move(basis)).first->second;
+  }
   const Eigen::MatrixXd& phi = solution_.full_shapes;
   Eigen::MatrixXd rhs = d.stiffness * phi.leftCols(q);
   if (d.mass.nonZeros() > 0) rhs -= (d.mass * phi.leftCols(q)) * lambda_.head(q).asDiagonal();
@@ -125,7 +162,13 @@ const Eigen::MatrixXd& ReducedModelFactory::Responses(const std::vector<Effect>&
   Eigen::MatrixXd rhs2 = d.stiffness * w.leftCols(q);
   if (d.mass.nonZeros() > 0) rhs2 -= (d.mass * w.leftCols(q)) * lambda_.head(q).asDiagonal();
   for (Eigen::Index j = 0; j < q; ++j) w.col(q + j) = factorisation_->ldlt.solve(rhs2.col(j));
-  return responses_.emplace(key, std::move(w)).first->second;
+  // Kept as an orthonormal basis of their span (column-pivoted QR, directions below 1e-8 of the
+  // largest dropped): a low-rank change has few directions, and each costs memory per DOF.
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(w);
+  qr.setThreshold(1e-8);
+  const Eigen::Index rank = qr.rank();
+  Eigen::MatrixXd basis = qr.householderQ() * Eigen::MatrixXd::Identity(w.rows(), rank);
+  return responses_.emplace(key, std::move(basis)).first->second;
 }
 
 std::unique_ptr<ReducedModel> ReducedModelFactory::Make(const std::vector<std::vector<Effect>>& probes) const {
@@ -133,37 +176,45 @@ std::unique_ptr<ReducedModel> ReducedModelFactory::Make(const std::vector<std::v
   const Eigen::MatrixXd& phi = solution_.full_shapes;
   const Eigen::SparseMatrix<double>& mass = system_.mass;
   const int n = DofCount();
-  // Candidates: the base's modes (M-orthonormal already), then each probe's responses, kept when
-  // they add a direction (Gram–Schmidt in the M inner product, twice for round-off).
-  std::vector<const Eigen::MatrixXd*> blocks{&phi};
-  for (const auto& probe : probes) blocks.push_back(&Responses(probe));
+  const auto m = phi.cols();
+  // The responses of every probe, M-orthogonalised against the base's modes (twice, for
+  // round-off), then M-orthonormalised among themselves through the eigen-decomposition of their
+  // M-Gram matrix (directions below drop_tolerance of the largest dropped).
   Eigen::Index total = 0;
-  for (const auto* b : blocks) total += b->cols();
-  Eigen::MatrixXd v(n, total), mv(n, total);
-  Eigen::Index kept = 0;
-  for (const auto* b : blocks)
-    for (Eigen::Index c = 0; c < b->cols(); ++c) {
-      Eigen::VectorXd x = b->col(c);
-      Eigen::VectorXd mx = mass * x;
-      const double before = std::sqrt(std::max(0.0, x.dot(mx)));
-      if (!(before > 0.0)) continue;
-      for (int pass = 0; pass < 2 && kept > 0; ++pass) {
-        const Eigen::VectorXd coefficients = mv.leftCols(kept).transpose() * x;
-        x -= v.leftCols(kept) * coefficients;
-      }
-      mx = mass * x;
-      const double after = std::sqrt(std::max(0.0, x.dot(mx)));
-      if (!(after > reduced_options_.drop_tolerance * before)) continue;
-      v.col(kept) = x / after;
-      mv.col(kept) = mx / after;
-      ++kept;
-    }
-  r->basis_ = v.leftCols(kept);
-  const Eigen::MatrixXd kv = system_.stiffness * r->basis_;
-  r->k0_ = r->basis_.transpose() * kv;
-  r->k0_ = 0.5 * (r->k0_ + r->k0_.transpose()).eval();
-  r->m0_ = r->basis_.transpose() * mv.leftCols(kept);
-  r->m0_ = 0.5 * (r->m0_ + r->m0_.transpose()).eval();
+  std::vector<const Eigen::MatrixXd*> blocks;
+  for (const auto& probe : probes) blocks.push_back(&Responses(probe)), total += blocks.back()->cols();
+  Eigen::MatrixXd w(n, total);
+  for (Eigen::Index c = 0; const auto* b : blocks) w.middleCols(c, b->cols()) = *b, c += b->cols();
+  for (int pass = 0; pass < 2 && total > 0; ++pass) w -= phi * (mass_modes_.transpose() * w);
+  Eigen::MatrixXd kept_w;
+  if (total > 0) {
+    const Eigen::MatrixXd mw = mass * w;
+    Eigen::MatrixXd gram = w.transpose() * mw;
+    gram = 0.5 * (gram + gram.transpose()).eval();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(gram);
+    const double largest = std::max(0.0, es.eigenvalues().maxCoeff());
+    std::vector<Eigen::Index> keep;
+    for (Eigen::Index k = 0; k < es.eigenvalues().size(); ++k)
+      if (es.eigenvalues()(k) > reduced_options_.drop_tolerance * reduced_options_.drop_tolerance * largest)
+        keep.push_back(k);
+    kept_w.resize(n, static_cast<Eigen::Index>(keep.size()));
+    for (size_t k = 0; k < keep.size(); ++k)
+      kept_w.col(static_cast<Eigen::Index>(k)) =
+          w * es.eigenvectors().col(keep[k]) / std::sqrt(es.eigenvalues()(keep[k]));
+  }
+  const Eigen::Index b = m + kept_w.cols();
+  r->basis_.resize(n, b);
+  r->basis_.leftCols(m) = phi;
+  r->basis_.rightCols(kept_w.cols()) = kept_w;
+  // VᵀKV: Φ's block is Λ and its coupling to the responses vanishes (KΦ = MΦΛ and the responses
+  // are M-orthogonal to Φ); only the responses' own block is projected. VᵀMV = I.
+  r->k0_ = Eigen::MatrixXd::Zero(b, b);
+  r->k0_.topLeftCorner(m, m).diagonal() = lambda_;
+  if (kept_w.cols() > 0) {
+    Eigen::MatrixXd kww = kept_w.transpose() * (system_.stiffness * kept_w);
+    r->k0_.bottomRightCorner(kept_w.cols(), kept_w.cols()) = 0.5 * (kww + kww.transpose());
+  }
+  r->m0_ = Eigen::MatrixXd::Identity(b, b);
   r->part_k_.resize(skeleton_.fe.parts.size());
   r->part_m_.resize(skeleton_.fe.parts.size());
   r->projected_.assign(skeleton_.fe.parts.size(), 0);
@@ -176,6 +227,21 @@ std::unique_ptr<ReducedModel> ReducedModelFactory::Make(const std::vector<std::v
   return r;
 }
 
+const std::vector<int>& ReducedModelFactory::PartRows(std::size_t p) const {
+  std::vector<int>& rows = part_rows_[p];
+  if (!rows.empty()) return rows;
+  const FePart& part = skeleton_.fe.parts[p];
+  const int offset = system_.body_dof_count;
+  std::vector<char> used(static_cast<size_t>(DofCount()), 0);
+  for (const auto* a : {part.stiffness.get(), part.mass.get()})
+    if (a)
+      for (int c = 0; c < a->outerSize(); ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(*a, c); it; ++it) used[static_cast<size_t>(offset + it.row())] = 1;
+  for (int i = 0; i < DofCount(); ++i)
+    if (used[static_cast<size_t>(i)]) rows.push_back(i);
+  return rows;
+}
+
 void ReducedModel::ProjectParts(const Model& changed) const {
   const ReducedModelFactory& f = *factory_;
   const int offset = f.system_.body_dof_count;
@@ -183,8 +249,9 @@ void ReducedModel::ProjectParts(const Model& changed) const {
     const FePart& now = changed.fe.parts[p];
     const FePart& was = f.skeleton_.fe.parts[p];
     if (projected_[p] || (now.stiffness_factor == was.stiffness_factor && now.mass_factor == was.mass_factor)) continue;
-    if (now.stiffness) part_k_[p] = ProjectPart(*now.stiffness, basis_, offset);
-    if (now.mass) part_m_[p] = ProjectPart(*now.mass, basis_, offset);
+    const std::vector<int>& rows = f.PartRows(p);
+    if (now.stiffness) part_k_[p] = ProjectPart(*now.stiffness, basis_, offset, rows);
+    if (now.mass) part_m_[p] = ProjectPart(*now.mass, basis_, offset, rows);
     projected_[p] = 1;
   }
 }

@@ -421,7 +421,12 @@ Solution Solve(const Model& input, const SolveOptions& options) {
     Eigen::SparseMatrix<double> mass = sys.mass;
     if (!massless.empty()) {
       const double tiny = 1e-12 * mass.diagonal().maxCoeff();
-      for (int i : massless) mass.coeffRef(i, i) = tiny;
+      // As a diagonal matrix added at once (coeffRef inserting one entry at a time is quadratic).
+      std::vector<Eigen::Triplet<double>> diag;
+      for (int i : massless) diag.emplace_back(i, i, tiny);
+      Eigen::SparseMatrix<double> extra(n, n);
+      extra.setFromTriplets(diag.begin(), diag.end());
+      mass += extra;
     }
     // Shift slightly below zero so K - sigma M is definite even with rigid-body modes.
     const double scale = sys.stiffness.diagonal().sum() / mass.diagonal().sum();

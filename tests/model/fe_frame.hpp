@@ -87,7 +87,8 @@ inline FrameFiles WriteFrame(const std::filesystem::path& dir, const FrameSpec& 
   fs::create_directories(dir);
   const int per_girder = spec.segments + 1, nodes = 2 * per_girder, n = 6 * nodes;
   const double dx = spec.length / spec.segments;
-  auto node_id = [&](int girder, int i) { return 1000 * (girder + 1) + i; };
+  const int id_base = spec.segments < 999 ? 1000 : 1000000;  // girder g's node i: id_base (g + 1) + i
+  auto node_id = [&](int girder, int i) { return id_base * (girder + 1) + i; };
   auto position = [&](int girder, int i) { return Eigen::Vector3d(dx * i, girder == 0 ? 0.0 : spec.width, 0.0); };
   auto dof = [&](int girder, int i, int d) { return 6 * (girder * per_girder + i) + d; };
   // Steel sections: girder I-beam, cross beam, deck plate strip.

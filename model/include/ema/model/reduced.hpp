@@ -64,7 +64,8 @@ class ReducedModelFactory {
 
   /// A reduced model whose basis holds the base's modes and the static responses to each probe
   /// (a list of effects applied to Skeleton()); the responses are computed once per probe and
-  /// kept, keyed by `Describe` of its effects.
+  /// kept, keyed by `Describe` of its effects, as an orthonormal basis of their span (a point
+  /// mass changes three DOFs: its responses span at most six directions, whatever the modes).
   std::unique_ptr<ReducedModel> Make(const std::vector<std::vector<Effect>>& probes) const;
 
   int DofCount() const;
@@ -80,6 +81,8 @@ class ReducedModelFactory {
   const Eigen::MatrixXd& Responses(const std::vector<Effect>& probe) const;
 
   struct Factorisation;
+  /// The rows (in system DOFs) on which part p has entries, for projecting it on those rows only.
+  const std::vector<int>& PartRows(std::size_t part) const;
   Model skeleton_;
   SolveOptions options_;
   ReducedModelOptions reduced_options_;
@@ -87,6 +90,8 @@ class ReducedModelFactory {
   System system_;                      ///< full K, M of the base
   System rest_;                        ///< bodies, springs, point masses of the base (no FE matrices)
   Eigen::VectorXd lambda_;             ///< eigenvalues of the kept elastic modes
+  Eigen::MatrixXd mass_modes_;         ///< M Φ (for M-orthogonalising responses against Φ)
+  mutable std::vector<std::vector<int>> part_rows_;  ///< per part, its non-zero rows (filled on use)
   double rigid_limit_ = 0.0;
   std::unique_ptr<Factorisation> factorisation_;
   mutable std::map<std::string, Eigen::MatrixXd> responses_;  ///< per probe, n × enriched_modes

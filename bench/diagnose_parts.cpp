@@ -1,0 +1,92 @@
+// Diagnosis of FE models built from parts (issue 27 item 3): "a 1000-DOF, 20-part model
+// diagnoses with pairs in < 10 s and a 50 000-DOF, 50-part model in < 2 min on 2 cores". The
+// articles are the two-girder footbridge frames of tests/model/fe_frame.hpp (3D beams, lumped
+// mass with massless rotations, parts: girder zones, cross beams, bearings, a deck part); the
+// truth has one girder zone at 40 % of its stiffness; the test is its first six vertical modes
+// at the 58 +Z DOFs of the test points, frequencies with 0.1 % noise and σ (fixed seed).
+// Peak memory: reported by the program's own getrusage after each case (docs/performance.md).
+#include <benchmark/benchmark.h>
+#include <sys/resource.h>
+
+#include <cmath>
+#include <random>
+
+#include "ema/diagnose/diagnose.hpp"
+#include "ema/formats/model_file.hpp"
+#include "ema/model/effects.hpp"
+#include "ema/model/solve.hpp"
+#include "model/fe_frame.hpp"
+
+namespace {
+
+using namespace ema;
+namespace fs = std::filesystem;
+
+ModeSet VerticalModes(const model::Model& truth, int count, double noise, unsigned seed) {
+  model::SolveOptions so;
+  so.max_modes = 3 * count;
+  const model::Solution s = model::Solve(truth, so);
+  ModeSet out;
+  std::vector<Eigen::Index> rows;
+  for (size_t d = 0; d < s.modes.dofs.size(); ++d)
+    if (s.modes.dofs[d].direction == 3) rows.push_back(static_cast<Eigen::Index>(d)), out.dofs.push_back(s.modes.dofs[d]);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (const Mode& m : s.modes.modes) {
+    if (static_cast<int>(out.modes.size()) == count) break;
+    double z = 0.0;
+    for (Eigen::Index r : rows) z += std::norm(m.shape(r));
+    if (z < 0.5 * m.shape.squaredNorm()) continue;
+    Mode t = m;
+    t.shape.resize(static_cast<Eigen::Index>(rows.size()));
+    for (size_t k = 0; k < rows.size(); ++k) t.shape(static_cast<Eigen::Index>(k)) = m.shape(rows[k]);
+    t.frequency_hz *= 1.0 + noise * gauss(rng);
+    t.frequency_std_hz = noise * m.frequency_hz;
+    out.modes.push_back(t);
+  }
+  return out;
+}
+
+void RunFrame(benchmark::State& state, int segments, int zones) {
+  testing::FrameSpec spec;
+  spec.segments = segments;
+  spec.zones = zones;
+  const fs::path dir = fs::temp_directory_path() / ("ema-bench-frame-" + std::to_string(segments));
+  const testing::FrameFiles files = testing::WriteFrame(dir, spec);
+  const model::Model nominal = formats::ReadModelFile(files.model);
+  const model::Model truth =
+      model::ApplyEffect(nominal, {"stiffness_scale", "girders/G3", {{"factor", 0.4}}, std::nullopt, 0});
+  const ModeSet test = VerticalModes(truth, 6, 1e-3, 7);
+  diagnose::Diagnosis d;
+  for (auto _ : state) d = diagnose::Diagnose(nominal, {{"", test}});
+  const diagnose::Candidate& first = d.candidates.front();
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  state.counters["dofs"] = files.dofs;
+  state.counters["parts"] = files.parts;
+  state.counters["full_solves"] = d.model_solves;
+  state.counters["peak_rss_MB"] = usage.ru_maxrss / 1024.0;
+  state.counters["rank1_right"] = first.target == "girders/G3" && first.effects.size() == 1;
+  state.counters["factor"] = first.parameters.empty() ? 0.0 : first.parameters[0].value;
+  fs::remove_all(dir);
+}
+
+// 972 DOFs, 17 parts (the test articles' size: girders G1..G8, cross X1..X4, bearings B1..B4, deck).
+void BM_DiagnoseFrame1000Dofs17Parts(benchmark::State& state) { RunFrame(state, 80, 8); }
+BENCHMARK(BM_DiagnoseFrame1000Dofs17Parts)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// 1 212 DOFs, 20 parts (zones 10: G1..G10, X1..X5, B1..B4, deck).
+void BM_DiagnoseFrame1200Dofs20Parts(benchmark::State& state) { RunFrame(state, 100, 10); }
+BENCHMARK(BM_DiagnoseFrame1200Dofs20Parts)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// 12 012 DOFs, 50 parts (a step between the two).
+void BM_DiagnoseFrame12000Dofs50Parts(benchmark::State& state) { RunFrame(state, 1000, 30); }
+BENCHMARK(BM_DiagnoseFrame12000Dofs50Parts)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// 50 004 DOFs, 50 parts (zones 30: G1..G30, X1..X15, B1..B4, deck).
+void BM_DiagnoseFrame50000Dofs50Parts(benchmark::State& state) { RunFrame(state, 4166, 30); }
+BENCHMARK(BM_DiagnoseFrame50000Dofs50Parts)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+}  // namespace
+
+BENCHMARK_MAIN();
