@@ -217,6 +217,7 @@ json BuildReportData(const ReportInput& input) {
   data["files"] = input.steps;
   data["problems"] = input.problems;
   data["diagnosis"] = input.diagnosis.is_null() ? json::object() : input.diagnosis;
+  data["diagnosis_view"] = DiagnosisView(input.diagnosis);
   if (!input.amplitude.is_null()) data["amplitude"] = input.amplitude;
   data["diagnosed_places"] = input.diagnosed_places.is_null() ? json::array() : input.diagnosed_places;
   data["history"] = input.history.is_null() ? json::array() : input.history;
@@ -257,6 +258,14 @@ json BuildReportData(const ReportInput& input) {
       }
     }
     s["rejected"] = rejected;
+    // The run's headline per test: how many FRFs, rejected impacts and fitted modes.
+    int frf_count = 0;
+    if (setup.frf_summary.is_object() && setup.frf_summary.contains("frfs") && setup.frf_summary["frfs"].is_array())
+      frf_count = static_cast<int>(setup.frf_summary["frfs"].size());
+    else if (setup.frfs)
+      frf_count = setup.frfs->OutputCount() * setup.frfs->ReferenceCount();
+    s["frf_count"] = frf_count;
+    s["mode_count"] = test.modes.size();
     setups.push_back(std::move(s));
   }
   data["setups"] = std::move(setups);

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 #include <complex>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -80,5 +81,28 @@ struct StabilisationPoints {
   std::vector<std::string> status;     ///< "stable" or what failed ("unstable", "f", "fd", ...)
 };
 StabilisationPoints ReadStabilisation(const nlohmann::json& stabilisation);
+
+/// The diagnosis (`ema diagnose --json`) as the page shows it; nothing is re-computed, only read,
+/// folded and put into words:
+///  - "story": the first screen — rank 1's effects, each with its summed probability over the
+///    candidates that hold it ("effect_probabilities"; "any": the same effect on any member or point
+///    of a wildcard) and its value ± σ in engineering units (the summary's words where it gives
+///    them); the mean error and MAC before → after; the adequacy to the test's noise in words
+///    ("noise_consistent", "reduced_chi2"); the test modes rank 1 still misses ("failing_modes");
+///    the look-alike readings, one line per group ("groups", the summary's factor-20 rule); rank 1's
+///    flags ("checks").
+///  - "groups": the candidates with look-alikes folded — one row per group (its best member's
+///    values, "more" members, the group's summed probability), the other members under "members";
+///    a candidate no group holds is a row of its own.
+///  - "modes": per test mode of each setup, the frequency and shape misfit in σ and the MAC as given
+///    and with rank 1, the mode's share of the fall in χ² ("share_pct") and a verdict ("within
+///    noise", "marginal" > 2σ, "misfit" > 3σ, "unpaired").
+/// Empty object: no diagnosis.
+nlohmann::json DiagnosisView(const nlohmann::json& diagnosis);
+
+/// A fitted parameter in engineering units with its 1σ: "E' = 168 ± 0.37 GPa (R' = 1 mm)",
+/// "k = 2.8 ± 0.1 N/µm", "m = 10.9 ± 2.6 g", "stiffness × 0.31 ± 0.02". NaN sigma: no "±".
+std::string ParameterText(const std::string& kind, const std::string& name, double value, double sigma,
+                          double radius_m = std::numeric_limits<double>::quiet_NaN());
 
 }  // namespace ema::report

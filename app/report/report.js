@@ -85,23 +85,342 @@
   function fmt(v, digits) {
     return (v === null || v === undefined || isNaN(v)) ? '–' : Number(v).toFixed(digits);
   }
+  // A table with its header row in <thead> (repeated on every printed page a long table spans).
   function table(parent, headers, rows, cls) {
     var t = el('table', { 'class': cls || '' });
-    t.appendChild(el('tr', null, headers.map(function (h) { return el('th', { text: h }); })));
+    t.appendChild(el('thead', null, [el('tr', null, headers.map(function (h) { return el('th', { text: h }); }))]));
+    var tb = el('tbody');
     rows.forEach(function (r) {
-      t.appendChild(el('tr', null, r.map(function (c) { return el('td', { text: String(c) }); })));
+      tb.appendChild(el('tr', null, r.map(function (c) { return el('td', { text: String(c) }); })));
     });
+    t.appendChild(tb);
     parent.appendChild(t);
     return t;
   }
 
-  // ---- summary ----
-  var top = section(main, 'Summary');
-  if (data.summary && data.summary.length) top.appendChild(el('pre', { 'class': 'summary', text: data.summary.join('\n') }));
-  if (data.problems && data.problems.length) {
-    top.appendChild(el('p', { 'class': 'missing', text: 'Steps that did not complete:' }));
-    top.appendChild(el('ul', null, data.problems.map(function (p) { return el('li', { text: p }); })));
+  // ---- the first screen: the run's headline and what the diagnosis found (data.diagnosis_view,
+  // app/report/report_data.cpp DiagnosisView: read from DIAG.json, folded and put into words) ----
+  var view = data.diagnosis_view || {};
+  var story = view.story;
+  var diag = data.diagnosis || {};
+  function pct(p) { return (p === null || p === undefined || isNaN(p)) ? '–' : (100 * p).toFixed(1) + ' %'; }
+  function num(v) {  // an error in % or a MAC: enough digits for 0.064 % as for 114 %
+    if (v === null || v === undefined || isNaN(v)) return '–';
+    var a = Math.abs(v);
+    return a >= 100 ? v.toFixed(0) : a >= 10 ? v.toFixed(1) : a >= 1 ? v.toFixed(2) : Number(v.toPrecision(2)).toString();
   }
+  function sigmas(v) {  // a misfit in σ, signed
+    if (v === null || v === undefined || isNaN(v)) return '–';
+    var a = Math.abs(v);
+    var s = a >= 100 ? a.toFixed(0) : a >= 10 ? a.toFixed(1) : a.toFixed(2);
+    return s === '0.00' ? s : (v < 0 ? '−' : '+') + s;
+  }
+  function kindWords(kind) { return String(kind || '').replace(/_/g, ' ').replace(/\+/g, ' + '); }
+  // A target such as "bearings+points:110" may wrap after '+', '/' and ':' (zero-width spaces).
+  function breakable(target) { return String(target || '').replace(/([+\/:])/g, '$1\u200b'); }
+  function sci(v) {  // a reduced χ²: 0.83, 14.2, 1.1e5, 2.2e-5
+    if (v === null || v === undefined || isNaN(v)) return '–';
+    if (v === 0 || (Math.abs(v) >= 0.01 && Math.abs(v) < 1e4)) return Number(v.toPrecision(3)).toString();
+    var e = Math.floor(Math.log10(Math.abs(v)));
+    return (v / Math.pow(10, e)).toFixed(1) + 'e' + e;
+  }
+  var hasDiagnosis = !!(story && diag.candidates && diag.candidates.length);
+  if (hasDiagnosis || (data.setups || []).length || (data.summary || []).length) {
+    var fs0 = el('section', { 'class': 'card first-screen', id: 'first-screen' });
+    main.appendChild(fs0);
+    if ((data.setups || []).length) {
+      var agreeMac = function (c) {
+        var s = (c || {}).summary;
+        return s ? fmt(s.mean_agreement_pct, 1) + ' % / ' + fmt(s.mean_mac, 3) : '–';
+      };
+      table(fs0, ['test', 'FRFs', 'impacts rejected', 'modes', 'model as given: agreement / MAC',
+        'updated model: agreement / MAC'], data.setups.map(function (s) {
+        return [s.name, s.frf_count === undefined ? '–' : s.frf_count, (s.rejected || []).length,
+          s.mode_count === undefined ? '–' : s.mode_count, agreeMac(s.correlation_before), agreeMac(s.correlation_after)];
+      }), 'headline');
+    }
+    if (hasDiagnosis) {
+      var st = el('div', { 'class': 'story', id: 'diagnosis-story' });
+      fs0.appendChild(st);
+      var n = story.effects.length;
+      st.appendChild(el('h2', { text: n ? 'Diagnosis: the model misses ' + n + ' effect' + (n > 1 ? 's' : '') :
+        'Diagnosis: no missing effect found' }));
+      st.appendChild(el('p', { 'class': 'lead', text: n ?
+        'Rank 1 of ' + view.candidate_count + ' candidates (probability ' + pct(story.probability) + ' for this exact ' +
+        'reading). Each effect below with its probability summed over every candidate that holds it, and its fitted value ± 1σ:' :
+        'No candidate explains the mismatch by more than its prior and parameter cost (probability ' + pct(story.probability) + ').' }));
+      if (n) {
+        st.appendChild(el('ol', { 'class': 'effects' }, story.effects.map(function (e) {
+          var head = el('div', { 'class': 'effect-head' }, [el('span', { 'class': 'effect-name', text: e.description }),
+            el('span', { 'class': 'prob' + (e.probability >= 0.9 ? ' sure' : e.probability < 0.5 ? ' unsure' : ''),
+              text: pct(e.probability) })]);
+          if (e.any && e.any.probability !== null) head.appendChild(el('span', { 'class': 'prob any',
+            text: pct(e.any.probability) + ' on any of ' + e.any.target }));
+          var item = el('li', null, [head]);
+          if (e.values) item.appendChild(el('div', { 'class': 'effect-values', text: e.values }));
+          return item;
+        })));
+      }
+      st.appendChild(el('p', { 'class': 'errline', text: 'Mean frequency error ' + num(story.error_before_pct) + ' % → ' +
+        num(story.error_after_pct) + ' %, mean MAC ' + fmt(story.mac_before, 3) + ' → ' + fmt(story.mac_after, 3) +
+        ' (the model as given → with rank 1).' }));
+      var ad = String(story.adequacy || '');
+      var cut = ad.indexOf(' — ');
+      var adequacy = el('div', { 'class': 'adequacy ' + (story.noise_consistent === true ? 'ok' :
+        story.noise_consistent === false ? 'bad' : 'unknown'), id: 'adequacy' },
+        [el('strong', { text: cut > 0 ? ad.slice(0, cut) : ad }), cut > 0 ? ad.slice(cut) : '']);
+      if (story.noise_consistent === false && story.failing_modes && story.failing_modes.length) {
+        adequacy.appendChild(el('div', { 'class': 'failing', text: 'Where: ' + story.failing_modes.slice(0, 4).join('; ') +
+          (story.failing_modes.length > 4 ? '; and ' + (story.failing_modes.length - 4) + ' more' : '') +
+          ' (evidence per test mode below).' }));
+      }
+      st.appendChild(adequacy);
+      if (n) {
+        var alike = story.lookalikes || [];
+        st.appendChild(el('p', { 'class': 'lookalikes' }, [el('strong', { text: 'Look-alikes these data cannot separate: ' }),
+          alike.length ? alike.map(function (a) { return a.text + ' ' + pct(a.probability); }).join('; ') + '.' :
+            'none within a factor 20 of rank 1.']));
+      }
+      if (story.checks && story.checks.length) {
+        st.appendChild(el('ul', { 'class': 'checks' }, story.checks.map(function (c) {
+          return el('li', null, [el('strong', { text: 'Check: ' }), String(c) + '.']);
+        })));
+      }
+    }
+    if (data.summary && data.summary.length) {
+      fs0.appendChild(el('details', { 'class': 'summary-text' }, [el('summary', { text: 'The run\'s summary as text (summary.txt)' }),
+        el('pre', { 'class': 'summary', text: data.summary.join('\n') })]));
+    }
+    if (data.problems && data.problems.length) {
+      fs0.appendChild(el('p', { 'class': 'missing', text: 'Steps that did not complete:' }));
+      fs0.appendChild(el('ul', null, data.problems.map(function (p) { return el('li', { text: p }); })));
+    }
+  }
+
+  // ---- the diagnosis: evidence per test mode, the candidates with look-alikes folded, the charts ----
+  var dg = section(main, 'Which physical effect is missing? The evidence and every candidate',
+    'Every effect of the vocabulary, on every group, member, point and body, and combinations of up to three, ' +
+    'fitted to all tests at once and ranked by posterior probability (rank 1 = most likely missing effects).');
+  dg.id = 'diagnosis';
+  if (hasDiagnosis) {
+    var cands = diag.candidates.slice().sort(function (a, b) { return a.rank - b.rank; });
+    if (diag.explanation) dg.appendChild(el('p', { 'class': 'explanation', text: String(diag.explanation) }));
+
+    // Evidence per test mode.
+    var modes = view.modes || [];
+    dg.appendChild(el('h3', { text: 'Evidence per test mode: which modes drove the answer, where the model still fails' }));
+    if (modes.length) {
+      dg.appendChild(el('p', { 'class': 'note', text: 'Misfit = (model − test) / σ of the test frequency (shape: (1 − MAC) / ' +
+        'shape σ); within ±2σ the model matches to the measurement\'s noise. "As given" is the nominal model, "rank 1" the ' +
+        'model with rank 1\'s effects. Share: the mode\'s part of the fall in χ² from the model as given to rank 1 (the ' +
+        'modes that drove the answer). Unpaired: no model mode pairs with the test mode.' }));
+      var ev = table(dg, ['test', 'mode', 'f test ± σ (Hz)', 'model f (Hz) as given → rank 1', 'frequency misfit (σ)',
+        'MAC', 'shape misfit (σ)', 'share of the fall', 'with rank 1'], [], 'evidence');
+      ev.id = 'evidence';
+      var tb = ev.querySelector('tbody');
+      modes.forEach(function (m) {
+        var tr = el('tr', { 'class': 'v-' + m.verdict.replace(/ /g, '-') });
+        var cell = function (text, cls) { var td = el('td', { text: text }); if (cls) td.className = cls; tr.appendChild(td); return td; };
+        // "as given → rank 1"; a line may break after the arrow only.
+        var arrow = function (b, a, f, pb, pa) {
+          return !pb && !pa ? 'unpaired' : (pb ? f(b) : 'unpaired') + '\u00a0→ ' + (pa ? f(a) : 'unpaired');
+        };
+        cell(m.setup || '');
+        cell(String(m.test_mode));
+        cell(fmt(m.test_frequency_hz, 2) + '\u00a0± ' + (m.sigma_hz === null ? '–' : Number(m.sigma_hz).toPrecision(2)));
+        cell(arrow(m.model_frequency_hz_before, m.model_frequency_hz_after, function (v) { return fmt(v, 1); },
+          m.paired_before, m.paired_after));
+        cell(arrow(m.frequency_misfit_sigma_before, m.frequency_misfit_sigma_after, sigmas, m.paired_before, m.paired_after), 'after');
+        cell(arrow(m.mac_before, m.mac_after, function (v) { return fmt(v, 3); }, m.paired_before, m.paired_after));
+        cell(arrow(m.shape_misfit_sigma_before, m.shape_misfit_sigma_after, function (v) { return fmt(v, 2); },
+          m.paired_before, m.paired_after));
+        var share = cell('', 'share');
+        if (m.share_pct !== null && m.share_pct !== undefined) {
+          share.appendChild(el('span', { 'class': 'bar', style: 'width:' + Math.max(1, Math.round(0.4 * m.share_pct)) + 'px' }));
+          share.appendChild(document.createTextNode(' ' + m.share_pct.toFixed(m.share_pct < 10 ? 1 : 0) + ' %'));
+        } else share.textContent = '–';
+        cell(m.verdict, 'verdict-cell');
+        tb.appendChild(tr);
+      });
+    } else {
+      unavailable(dg, 'Evidence per test mode (DIAG.json "modes")');
+    }
+
+    // The candidates, one row per group of look-alikes; a group's members open under it.
+    var groups = view.groups || [];
+    dg.appendChild(el('h3', { text: 'Candidates: ' + groups.length + ' readings of ' + cands.length +
+      ' candidates (the same reading on other members or points folded into one row)' }));
+    var ct = table(dg, ['rank', 'effect(s)', 'where', 'fitted values of the best (± 1σ)', 'probability (summed)',
+      'mean |f error| %', 'mean MAC', 'reduced χ²'], [], 'small candidates');
+    ct.id = 'candidates';
+    var ctb = ct.querySelector('tbody');
+    var candidateRow = function (c, member) {
+      var tr = el('tr', { 'class': member ? 'member' : 'group' + (c.rank === 1 ? ' rank1' : '') });
+      var td = function (content, cls) {
+        var cellEl = el('td', cls ? { 'class': cls } : null, Array.isArray(content) ? content : [String(content)]);
+        tr.appendChild(cellEl);
+        return cellEl;
+      };
+      td(String(c.rank));
+      td(member ? '' : kindWords(c.kind), 'text');
+      var where = td([breakable(c.target) || '—'], 'text');
+      td([c.parameters || ''].concat((c.flags || []).map(function (f) { return el('div', { 'class': 'flag', text: 'Check: ' + f }); })), 'text');
+      td(pct(c.probability));
+      td(num(c.mean_abs_frequency_error_pct));
+      td(fmt(c.mean_mac, 3));
+      td(sci(c.reduced_chi2));
+      ctb.appendChild(tr);
+      return where;
+    };
+    groups.forEach(function (g) {
+      var where = candidateRow(g, false);
+      if (!g.more) return;
+      var memberRows = [];
+      var button = el('button', { type: 'button', 'class': 'more', 'aria-expanded': 'false',
+        text: '+ ' + g.more + ' more ' + g.more_noun + (g.pattern && g.pattern !== g.target ? ' (' + breakable(g.pattern) + ')' : '') });
+      where.appendChild(el('br'));
+      where.appendChild(button);
+      g.members.forEach(function (m) {
+        candidateRow(m, true);
+        memberRows.push(ctb.lastChild);
+      });
+      button.addEventListener('click', function () {
+        var open = button.getAttribute('aria-expanded') !== 'true';
+        button.setAttribute('aria-expanded', open ? 'true' : 'false');
+        memberRows.forEach(function (r) { r.classList.toggle('open', open); });
+      });
+    });
+
+    // Charts: the ranking (one bar per reading) and the error per mode before and after.
+    var shownGroups = groups.slice(0, 12);
+    var baseErr = diag.baseline ? diag.baseline.mean_abs_frequency_error_pct : null;
+    var label = function (g) {
+      return '#' + g.rank + ' ' + kindWords(g.kind) + (g.target ? ' (' + g.target + (g.more ? ' +' + g.more : '') + ')' : '');
+    };
+    var labels = shownGroups.map(label).reverse();
+    var errs = shownGroups.map(function (g) { return g.mean_abs_frequency_error_pct; }).reverse();
+    var bars = [{ type: 'bar', orientation: 'h', name: 'mean |frequency error| after fitting (%)', y: labels, x: errs,
+      marker: { color: shownGroups.map(function (g) { return g.rank === 1 ? '#1b7837' : '#92c5de'; }).reverse() },
+      text: errs.map(function (e) { return num(e) + ' %'; }), textposition: 'outside', cliponaxis: false,
+      hovertext: shownGroups.map(function (g) { return 'probability ' + pct(g.probability); }).reverse() }];
+    var dshapes = [];
+    if (baseErr !== null && baseErr !== undefined) {
+      dshapes.push({ type: 'line', x0: baseErr, x1: baseErr, yref: 'paper', y0: 0, y1: 1, line: { color: '#b2182b', dash: 'dash' } });
+    }
+    var row = el('div', { 'class': 'row' });
+    dg.appendChild(row);
+    var c1 = el('div', { 'class': 'col' }, [el('h3', { text: 'Ranking, one bar per reading (dashed: the model as given)' })]);
+    var c2 = el('div', { 'class': 'col' }, [el('h3', { text: 'The error falls, per test mode' })]);
+    row.appendChild(c1);
+    row.appendChild(c2);
+    chart(c1, bars, { height: Math.max(300, 34 * shownGroups.length + 100), xaxis: { title: { text: 'mean |frequency error| (%)' }, type: 'log' },
+      margin: { l: 20, r: 60, t: 10, b: 50 }, yaxis: { automargin: true }, shapes: dshapes, showlegend: false }, 'half');
+    var fallX = [], fallSetup = [], fallMode = [], before = [], after = [];
+    (data.setups || []).forEach(function (setup) {
+      var b = (setup.correlation_before || {}).pairs || [];
+      var a = (setup.correlation_after || {}).pairs || [];
+      b.forEach(function (p) {
+        var q = a.filter(function (x) { return x.test_mode === p.test_mode; })[0];
+        fallX.push(setup.name + ' T' + p.test_mode);
+        fallSetup.push(setup.name);
+        fallMode.push('T' + p.test_mode);
+        before.push(100 - p.agreement_pct);
+        after.push(q ? 100 - q.agreement_pct : null);
+      });
+    });
+    var fall;
+    if (fallX.length) {
+      // Two-level axis: the test mode under its setup (no slanted labels to collide).
+      fall = [{ type: 'bar', name: 'model as given', x: [fallSetup, fallMode], y: before, marker: { color: '#d6604d' } },
+        { type: 'bar', name: 'updated model (rank 1)', x: [fallSetup, fallMode], y: after, marker: { color: '#1b7837' } }];
+    } else {
+      fall = [{ type: 'bar', x: ['model as given', 'rank 1'],
+        y: [baseErr, cands[0].mean_abs_frequency_error_pct], marker: { color: ['#d6604d', '#1b7837'] } }];
+    }
+    chart(c2, fall, { height: 360, barmode: 'group', yaxis: { title: { text: '100 − agreement (%)' }, type: 'log', dtick: 1 },
+      xaxis: { automargin: true }, legend: { orientation: 'h', y: -0.25 } }, 'half');
+  } else {
+    unavailable(dg, 'Diagnosis');
+  }
+
+  // ---- the diagnosis' story: where it acts, the error falling effect by effect and over versions ----
+  // (issue 13; kept in this block so other report sections stay untouched)
+  (function drawDiagnosisStory() {
+    var story = section(main, 'Where, effect by effect, version by version',
+      'Rank 1\'s members and points on the test geometry; the error as each of its effects is added; ' +
+      'the model\'s agreement over the runs into this output folder (history.json).');
+    story.id = 'where';
+    var places = data.diagnosed_places || [];
+    var geo = null;
+    (data.setups || []).forEach(function (s) { if (!geo && s.shapes && s.shapes.nodes && s.shapes.nodes.length) geo = s.shapes; });
+    var placed = places.filter(function (p) { return p.points && p.points.length; });
+    if (placed.length) {
+      var traces = [];
+      if (geo) {
+        traces.push({ type: 'scatter3d', mode: 'markers', name: 'test points', x: geo.nodes.map(function (n) { return n.x; }),
+          y: geo.nodes.map(function (n) { return n.y; }), z: geo.nodes.map(function (n) { return n.z; }),
+          text: geo.nodes.map(function (n) { return 'node ' + n.id; }), hoverinfo: 'text', marker: { size: 3, color: '#777' } });
+        var lx = [], ly = [], lz = [];
+        (geo.lines || []).forEach(function (l) {
+          var a = geo.nodes[l[0]], b = geo.nodes[l[1]];
+          lx.push(a.x, b.x, null); ly.push(a.y, b.y, null); lz.push(a.z, b.z, null);
+        });
+        if (lx.length) traces.push({ type: 'scatter3d', mode: 'lines', name: 'wireframe', x: lx, y: ly, z: lz,
+          hoverinfo: 'skip', line: { color: '#bbb' } });
+      }
+      var colours = ['#b2182b', '#2166ac', '#1b7837'];
+      placed.forEach(function (p, i) {
+        traces.push({ type: 'scatter3d', mode: 'markers+text', name: p.kind + ' on ' + p.target,
+          x: p.points.map(function (q) { return q[0]; }), y: p.points.map(function (q) { return q[1]; }),
+          z: p.points.map(function (q) { return q[2]; }), text: p.points.map(function () { return p.label; }),
+          textposition: 'top center', marker: { size: 7, symbol: 'diamond', color: colours[i % colours.length] } });
+      });
+      story.appendChild(el('h3', { text: 'Diagnosed: ' + placed.map(function (p) { return p.target; }).join(' + ') }));
+      chart(story, traces, { height: 420, margin: { l: 0, r: 0, t: 10, b: 0 }, scene: { aspectmode: 'data' } }, 'half');
+    } else {
+      story.appendChild(el('p', { text: 'Rank 1 is "none" or acts on no located place: nothing to highlight.' }));
+    }
+    // A log axis over whole decades around the values (a flat series gets one decade each side).
+    var decades = function (values) {
+      var logs = values.filter(function (v) { return v > 0; }).map(Math.log10);
+      if (!logs.length) return undefined;
+      return [Math.floor(Math.min.apply(null, logs)) - (Math.max.apply(null, logs) - Math.min.apply(null, logs) < 0.5 ? 1 : 0),
+        Math.ceil(Math.max.apply(null, logs)) + (Math.max.apply(null, logs) - Math.min.apply(null, logs) < 0.5 ? 1 : 0)];
+    };
+    var steps = (data.diagnosis || {}).steps || [];
+    if (steps.length > 1) {
+      var sx = steps.map(function (st, i) { return i === 0 ? 'model as given' : '+ ' + st.added; });
+      chart(story, [{ type: 'scatter', mode: 'lines+markers', name: 'mean |frequency error| (%)', x: sx,
+        y: steps.map(function (st) { return st.mean_abs_frequency_error_pct; }) },
+      { type: 'scatter', mode: 'lines+markers', name: '1 − mean MAC', x: sx, yaxis: 'y2',
+        // 1 − MAC below 10⁻⁶ is rounding (MAC 1.000): drawn at 10⁻⁶, not as a log axis of noise.
+        y: steps.map(function (st) { return Math.max(1 - st.mean_mac, 1e-6); }) }],
+      { height: 320, yaxis: { title: { text: 'mean |frequency error| (%)' }, type: 'log', exponentformat: 'power' },
+        yaxis2: { title: { text: '1 − mean MAC' }, overlaying: 'y', side: 'right', type: 'log', exponentformat: 'power',
+          range: decades(steps.map(function (st) { return Math.max(1 - st.mean_mac, 1e-6); })), dtick: 1, showgrid: false },
+        xaxis: { automargin: true }, legend: { orientation: 'h' } }, 'half');
+    }
+    var history = data.history || [];
+    if (history.length) {
+      var hx = history.map(function (h) { return 'v' + h.version + ' ' + String(h.hash || '').slice(0, 8); });
+      var err = function (key) { return history.map(function (h) { return h[key] === null || h[key] === undefined ? null : 100 - h[key]; }); };
+      chart(story, [{ type: 'scatter', mode: 'lines+markers', name: 'model as run (100 − mean agreement, %)', x: hx,
+        y: err('mean_agreement_pct_before'),
+        text: history.map(function (h) { return (h.effects || []).join('; ') || 'no [[effect]] blocks'; }) },
+      { type: 'scatter', mode: 'lines+markers', name: 'with the diagnosed effect(s)', x: hx, y: err('mean_agreement_pct_after'),
+        text: history.map(function (h) { return h.diagnosis ? h.diagnosis.kind + ' on ' + h.diagnosis.target : ''; }) }],
+      { height: 320, yaxis: { title: { text: '100 − mean agreement (%)' }, type: 'log', dtick: 1,
+        range: decades(err('mean_agreement_pct_before').concat(err('mean_agreement_pct_after'))) },
+        xaxis: { title: { text: 'model version' } },
+        legend: { orientation: 'h' } }, 'half');
+      table(story, ['version', 'when', 'hash', 'effects in the model', 'mean agreement', 'diagnosed next'],
+        history.map(function (h) {
+          return [h.version, h.stamp || '', String(h.hash || '').slice(0, 12), (h.effects || []).join('; '),
+            fmt(h.mean_agreement_pct_before, 2) + ' %',
+            h.diagnosis ? h.diagnosis.kind + ' on ' + h.diagnosis.target + ' (p ' + fmt(100 * (h.diagnosis.probability || 0), 1) + ' %)' : ''];
+        }), 'small');
+    }
+  })();
 
   // ---- per setup ----
   (data.setups || []).forEach(function (setup) {
@@ -377,7 +696,12 @@
       ], { height: 520, scene: { aspectmode: 'data', xaxis: { range: lim(restX), title: { text: 'X (m)' } },
         yaxis: { range: lim(restY), title: { text: 'Y (m)' } }, zaxis: { range: lim(restZ), title: { text: 'Z (m)' } } },
         margin: { l: 0, r: 0, t: 10, b: 10 } });
-      modeSelect.addEventListener('change', function () { current = Number(modeSelect.value); });
+      var refresh = null;
+      modeSelect.addEventListener('change', function () {
+        current = Number(modeSelect.value);
+        clearTimeout(refresh);  // the printed picture follows the mode picked
+        refresh = setTimeout(function () { snapshot(shapeDiv); }, 300);
+      });
       var animating = false;
       var step = function () {
         if (!shapeDiv.getAttribute('data-rendered') || animating) return;
@@ -394,149 +718,48 @@
     }
   });
 
-  // ---- diagnosis ----
-  var dg = section(main, 'Which physical effect is missing?',
-    'Every effect of the vocabulary, on every group, member, point and body, and combinations of up to three, ' +
-    'fitted to all tests at once and ranked by posterior probability (rank 1 = most likely missing effects).');
-  var diag = data.diagnosis || {};
-  if (diag.candidates && diag.candidates.length) {
-    var cands = diag.candidates.slice().sort(function (a, b) { return a.rank - b.rank; });
-    var name = function (c) { return '#' + c.rank + ' ' + c.kind + (c.target ? ' (' + c.target + ')' : ''); };
-    var shown = cands.slice(0, 12);
-    var baseErr = diag.baseline ? diag.baseline.mean_abs_frequency_error_pct : null;
-    var labels = shown.map(name).reverse();
-    var errs = shown.map(function (c) { return c.mean_abs_frequency_error_pct; }).reverse();
-    var bars = [{ type: 'bar', orientation: 'h', name: 'mean |frequency error| after fitting (%)', y: labels, x: errs,
-      marker: { color: shown.map(function (c) { return c.rank === 1 ? '#1b7837' : '#92c5de'; }).reverse() },
-      text: errs.map(function (e) { return fmt(e, 2) + ' %'; }), textposition: 'auto' }];
-    var dshapes = [];
-    if (baseErr !== null && baseErr !== undefined) {
-      dshapes.push({ type: 'line', x0: baseErr, x1: baseErr, yref: 'paper', y0: 0, y1: 1, line: { color: '#b2182b', dash: 'dash' } });
-    }
-    var row = el('div', { 'class': 'row' });
-    dg.appendChild(row);
-    var c1 = el('div', { 'class': 'col' }, [el('h3', { text: 'Ranking (dashed: the nominal model\'s error)' })]);
-    var c2 = el('div', { 'class': 'col' }, [el('h3', { text: 'The error falls' })]);
-    row.appendChild(c1);
-    row.appendChild(c2);
-    chart(c1, bars, { height: Math.max(300, 40 * shown.length + 100), xaxis: { title: { text: 'mean |frequency error| (%)' }, type: 'log' },
-      margin: { l: 260, r: 20, t: 10, b: 50 }, shapes: dshapes, showlegend: false }, 'half');
-
-    // Error falls: mean error of the nominal model, of the best candidate, and per-mode errors before/after.
-    var fallX = [], before = [], after = [];
-    (data.setups || []).forEach(function (setup) {
-      var b = (setup.correlation_before || {}).pairs || [];
-      var a = (setup.correlation_after || {}).pairs || [];
-      b.forEach(function (p) {
-        var q = a.filter(function (x) { return x.test_mode === p.test_mode; })[0];
-        fallX.push(setup.name + ' T' + p.test_mode);
-        before.push(100 - p.agreement_pct);
-        after.push(q ? 100 - q.agreement_pct : null);
-      });
-    });
-    var fall;
-    if (fallX.length) {
-      fall = [{ type: 'bar', name: 'nominal model', x: fallX, y: before, marker: { color: '#d6604d' } },
-        { type: 'bar', name: 'updated model (' + name(cands[0]) + ')', x: fallX, y: after, marker: { color: '#1b7837' } }];
-    } else {
-      fall = [{ type: 'bar', x: ['nominal model', name(cands[0])],
-        y: [baseErr, cands[0].mean_abs_frequency_error_pct], marker: { color: ['#d6604d', '#1b7837'] } }];
-    }
-    chart(c2, fall, { height: 360, barmode: 'group', yaxis: { title: { text: '100 − agreement (%)' }, type: 'log' },
-      xaxis: { tickangle: -45 } }, 'half');
-
-    var best = cands[0];
-    var params = best.parameters ? JSON.stringify(best.parameters) : '';
-    dg.appendChild(el('p', { 'class': 'verdict', text: 'Rank 1: ' + best.kind + (best.target ? ' on "' + best.target + '"' : '') +
-      ' ' + params + (best.probability !== undefined && best.probability !== null ? ' (probability ' + fmt(100 * best.probability, 1) + ' %)' : '') + ' — mean |frequency error| ' + fmt(baseErr, 2) + ' % → ' + fmt(best.mean_abs_frequency_error_pct, 2) +
-      ' %, mean MAC ' + fmt(best.mean_mac, 3) + '.' }));
-    if (diag.explanation) dg.appendChild(el('p', { text: String(diag.explanation) }));
-    table(dg, ['rank', 'kind', 'target', 'parameters', 'probability', 'mean |f error| %', 'mean MAC', 'score'], cands.map(function (c) {
-      return [c.rank, c.kind, c.target || '', c.parameters ? JSON.stringify(c.parameters) : '',
-        c.probability === undefined || c.probability === null ? '' : fmt(100 * c.probability, 1) + ' %',
-        fmt(c.mean_abs_frequency_error_pct, 2), fmt(c.mean_mac, 3), fmt(c.score, 2)];
-    }), 'small');
-  } else {
-    unavailable(dg, 'Diagnosis');
-  }
-
   drawAmplitude(data.amplitude);
-  // ---- the diagnosis' story: where it acts, the error falling effect by effect and over versions ----
-  // (issue 13; kept in this block so other report sections stay untouched)
-  (function drawDiagnosisStory() {
-    var story = section(main, 'Where, effect by effect, version by version',
-      'Rank 1\'s members and points on the test geometry; the error as each of its effects is added; ' +
-      'the model\'s agreement over the runs into this output folder (history.json).');
-    var places = data.diagnosed_places || [];
-    var geo = null;
-    (data.setups || []).forEach(function (s) { if (!geo && s.shapes && s.shapes.nodes && s.shapes.nodes.length) geo = s.shapes; });
-    var placed = places.filter(function (p) { return p.points && p.points.length; });
-    if (placed.length) {
-      var traces = [];
-      if (geo) {
-        traces.push({ type: 'scatter3d', mode: 'markers', name: 'test points', x: geo.nodes.map(function (n) { return n.x; }),
-          y: geo.nodes.map(function (n) { return n.y; }), z: geo.nodes.map(function (n) { return n.z; }),
-          text: geo.nodes.map(function (n) { return 'node ' + n.id; }), hoverinfo: 'text', marker: { size: 3, color: '#777' } });
-        var lx = [], ly = [], lz = [];
-        (geo.lines || []).forEach(function (l) {
-          var a = geo.nodes[l[0]], b = geo.nodes[l[1]];
-          lx.push(a.x, b.x, null); ly.push(a.y, b.y, null); lz.push(a.z, b.z, null);
-        });
-        if (lx.length) traces.push({ type: 'scatter3d', mode: 'lines', name: 'wireframe', x: lx, y: ly, z: lz,
-          hoverinfo: 'skip', line: { color: '#bbb' } });
-      }
-      var colours = ['#b2182b', '#2166ac', '#1b7837'];
-      placed.forEach(function (p, i) {
-        traces.push({ type: 'scatter3d', mode: 'markers+text', name: p.kind + ' on ' + p.target,
-          x: p.points.map(function (q) { return q[0]; }), y: p.points.map(function (q) { return q[1]; }),
-          z: p.points.map(function (q) { return q[2]; }), text: p.points.map(function () { return p.label; }),
-          textposition: 'top center', marker: { size: 7, symbol: 'diamond', color: colours[i % colours.length] } });
-      });
-      story.appendChild(el('h3', { text: 'Diagnosed: ' + placed.map(function (p) { return p.target; }).join(' + ') }));
-      chart(story, traces, { height: 420, margin: { l: 0, r: 0, t: 10, b: 0 }, scene: { aspectmode: 'data' } }, 'half');
-    } else {
-      story.appendChild(el('p', { text: 'Rank 1 is "none" or acts on no located place: nothing to highlight.' }));
-    }
-    var steps = (data.diagnosis || {}).steps || [];
-    if (steps.length > 1) {
-      var sx = steps.map(function (st, i) { return i === 0 ? 'model as given' : '+ ' + st.added; });
-      chart(story, [{ type: 'scatter', mode: 'lines+markers', name: 'mean |frequency error| (%)', x: sx,
-        y: steps.map(function (st) { return st.mean_abs_frequency_error_pct; }) },
-      { type: 'scatter', mode: 'lines+markers', name: '1 − mean MAC', x: sx, yaxis: 'y2',
-        y: steps.map(function (st) { return 1 - st.mean_mac; }) }],
-      { height: 320, yaxis: { title: { text: 'mean |frequency error| (%)' }, type: 'log' },
-        yaxis2: { title: { text: '1 − mean MAC' }, overlaying: 'y', side: 'right', type: 'log' },
-        legend: { orientation: 'h' } }, 'half');
-    }
-    var history = data.history || [];
-    if (history.length) {
-      var hx = history.map(function (h) { return 'v' + h.version + ' ' + String(h.hash || '').slice(0, 8); });
-      var err = function (key) { return history.map(function (h) { return h[key] === null || h[key] === undefined ? null : 100 - h[key]; }); };
-      chart(story, [{ type: 'scatter', mode: 'lines+markers', name: 'model as run (100 − mean agreement, %)', x: hx,
-        y: err('mean_agreement_pct_before'),
-        text: history.map(function (h) { return (h.effects || []).join('; ') || 'no [[effect]] blocks'; }) },
-      { type: 'scatter', mode: 'lines+markers', name: 'with the diagnosed effect(s)', x: hx, y: err('mean_agreement_pct_after'),
-        text: history.map(function (h) { return h.diagnosis ? h.diagnosis.kind + ' on ' + h.diagnosis.target : ''; }) }],
-      { height: 320, yaxis: { title: { text: '100 − mean agreement (%)' }, type: 'log' }, xaxis: { title: { text: 'model version' } },
-        legend: { orientation: 'h' } }, 'half');
-      table(story, ['version', 'when', 'hash', 'effects in the model', 'mean agreement', 'diagnosed next'],
-        history.map(function (h) {
-          return [h.version, h.stamp || '', String(h.hash || '').slice(0, 12), (h.effects || []).join('; '),
-            fmt(h.mean_agreement_pct_before, 2) + ' %',
-            h.diagnosis ? h.diagnosis.kind + ' on ' + h.diagnosis.target + ' (p ' + fmt(100 * (h.diagnosis.probability || 0), 1) + ' %)' : ''];
-        }), 'small');
-    }
-  })();
 
   if (data.files && data.files.length) {
     var files = section(main, 'Files written by this run');
     files.appendChild(el('ul', { 'class': 'files' }, data.files.map(function (f) { return el('li', null, [el('code', { text: f })]); })));
   }
 
-  // Printing: redraw the charts at the page's width (and back at the window's afterwards).
-  function resizeCharts() { charts.forEach(function (div) { Plotly.Plots.resize(div); }); }
-  window.addEventListener('beforeprint', resizeCharts);
-  window.addEventListener('afterprint', resizeCharts);
+  // Printing. Chromium runs 'beforeprint' while the page still has the window's layout, then lays
+  // the page out at the paper's printable width with no script in between: every 2D chart is
+  // redrawn at that width first (A4 less the 12 mm margins of report.css: 186 mm = 703 CSS px), and
+  // back to the window's width afterwards. A 3D (WebGL) chart does not print: each one keeps a
+  // picture of itself at the page's width (refreshed when it changes), which print shows instead.
+  var PRINT_WIDTH = 700;
+  function is3d(div) { return !!(div._fullLayout && div._fullLayout._has && div._fullLayout._has('gl3d')); }
+  function snapshot(div) {
+    if (!is3d(div) || !div.getAttribute('data-rendered')) return Promise.resolve();
+    var height = (div._fullLayout && div._fullLayout.height) || 420;
+    return Plotly.toImage(div, { format: 'png', width: PRINT_WIDTH, height: height }).then(function (url) {
+      var img = div.nextSibling && div.nextSibling.className === 'print-snapshot' ? div.nextSibling :
+        div.parentNode.insertBefore(el('img', { 'class': 'print-snapshot', alt: chartTitle(div) }), div.nextSibling);
+      img.src = url;
+      div.classList.add('has-print-snapshot');
+    }, function (e) {  // no picture: print shows the live chart (blank where WebGL does not print)
+      body.setAttribute('data-print-snapshot-error', String(e && e.message || e));
+    });
+  }
+  var PRINT_MAX_HEIGHT = 640;  // a tall chart (the coherence map) still shares its page with its heading
+  window.addEventListener('beforeprint', function () {
+    charts.forEach(function (div) {
+      if (is3d(div)) return;
+      var height = div.layout.height;
+      div.setAttribute('data-screen-height', height || '');
+      Plotly.relayout(div, { width: PRINT_WIDTH, height: height ? Math.min(height, PRINT_MAX_HEIGHT) : height });
+    });
+  });
+  window.addEventListener('afterprint', function () {
+    charts.forEach(function (div) {
+      if (is3d(div)) return;
+      var height = Number(div.getAttribute('data-screen-height')) || div.layout.height;
+      Plotly.relayout(div, { width: null, height: height }).then(function () { Plotly.Plots.resize(div); });
+    });
+  });
   // ---- amplitude dependence (ema amplitude --json; docs/amplitude.md) ----
   function drawAmplitude(amp) {
     if (!amp || !amp.modes || !amp.modes.length) return;
@@ -572,6 +795,9 @@
   body.setAttribute('data-charts-expected', String(expected));
   Promise.all(pending).then(function () {
     body.setAttribute('data-charts-rendered', String(rendered));
+    // The 3D charts' pictures for print, one after the other (in the background).
+    charts.reduce(function (chain, div) { return chain.then(function () { return snapshot(div); }); }, Promise.resolve())
+      .then(function () { body.setAttribute('data-print-snapshots', 'done'); });
     // Self-check of the download buttons (opened as report.html#export-check by the tests): every
     // chart exported as SVG (its text must hold the chart's title) and as PNG.
     if (window.location.hash !== '#export-check') return;
