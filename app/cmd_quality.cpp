@@ -18,6 +18,7 @@ std::optional<app::QualityConfig> app::ParseQualityArgs(const std::vector<std::s
   namespace po = cli::po;
   const std::string usage =
       "ema quality FRF.unv [FRF2.unv ...] [--modes MODES.unv] [--json Q.json] [--band LO:HI]\n"
+      "ema quality --modes MODES.unv [--json Q.json]\n"
       "        [--reciprocity-tol X] [--coherence-min X] [--scatter-max X] [--mpc-min X] [--mpd-max DEG]";
   po::options_description options(
       "ema quality: data-quality checks before (and after) fitting, each with a pass/warn verdict.\n"
@@ -28,7 +29,8 @@ std::optional<app::QualityConfig> app::ParseQualityArgs(const std::vector<std::s
   frf::QualityOptions& q = config.quality;
   curvefit::ComplexityOptions& c = config.complexity;
   options.add_options()
-      ("input", po::value(&config.inputs)->required()->multitoken(), "FRF files (UFF 58 type 4 + coherence type 6, or FRF tables)")
+      ("input", po::value(&config.inputs)->multitoken(), "FRF files (UFF 58 type 4 + coherence type 6, or FRF tables); "
+       "none with --modes: the modes' checks alone")
       ("modes", po::value(&config.modes_path), "fitted modes (UFF 55): MPC, MPD and MCF per mode")
       ("json", po::value(&config.json_path), "numbers and verdicts as JSON (cli.md, ema quality)")
       ("band", po::value(&band), "band LO:HI in Hz of the FRF checks (default: all lines above DC)")
@@ -43,6 +45,8 @@ std::optional<app::QualityConfig> app::ParseQualityArgs(const std::vector<std::s
   positional.add("input", -1);
   po::variables_map vm;
   if (!cli::Parse(args, usage, options, positional, &vm)) return std::nullopt;
+  if (config.inputs.empty() && config.modes_path.empty())
+    throw UsageError("ema quality needs FRF files (FRF.unv ...), or --modes MODES.unv for the modes' checks alone");
   cli::RefuseOutputsOverInputs(vm, {"input", "modes"}, {"json"});
   if (!band.empty()) std::tie(q.band_lo_hz, q.band_hi_hz) = cli::ParseBand(band);
   std::string error;
@@ -60,7 +64,8 @@ app::QualityStageResult app::RunQualityStage(const QualityConfig& config, const 
   stage.json = QualityJson(stage.frfs, stage.modes, config.quality);
   const nlohmann::json& j = stage.json;
   if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, j.dump(1) + "\n");
-  out << "data quality of " << inputs.front() << (inputs.size() > 1 ? " (+" + std::to_string(inputs.size() - 1) + ")" : "")
+  const std::string what = !inputs.empty() ? inputs.front() : config.modes_path;
+  out << "data quality of " << what << (inputs.size() > 1 ? " (+" + std::to_string(inputs.size() - 1) + ")" : "")
       << ": " << j["verdict"].get<std::string>() << " (" << j["warnings"].get<int>() << " warning(s))\n"
       << QualityText(stage.frfs, stage.modes);
   return stage;

@@ -82,6 +82,30 @@ FileSummary SummarizeFile(const std::filesystem::path& path) {
   s.file = path.string();
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path.string(), "no such file");
+  if (std::filesystem::is_directory(path, ec)) {
+    // A folder, as `ema fit` reads it: FRF tables (ReadFrfSet).
+    const FrfSet frfs = ReadFrfSet(path);
+    s.format = "frf-table folder";
+    for (const auto& entry : std::filesystem::directory_iterator(path, ec))
+      if (entry.is_regular_file()) s.bytes += entry.file_size();
+    for (int r = 0; r < frfs.ReferenceCount(); ++r)
+      for (int o = 0; o < frfs.OutputCount(); ++o) {
+        if (!frfs.h[static_cast<size_t>(r)].col(o).real().array().isFinite().any()) continue;  // not measured
+        ++s.records;
+        ++s.function_types[4];
+      }
+    for (const Dof& d : frfs.outputs) s.response_dofs.insert({d.node, d.direction});
+    for (const Dof& d : frfs.references) s.reference_dofs.insert({d.node, d.direction});
+    auto& a = s.abscissa[4];
+    if (frfs.LineCount() > 0) {
+      a.min = frfs.frequency_hz(0);
+      a.max = frfs.frequency_hz(frfs.LineCount() - 1);
+      a.points_min = a.points_max = frfs.LineCount();
+    }
+    a.units.insert("Hz");
+    a.ordinate_units.insert(frfs.response_unit + " / " + frfs.force_unit);
+    return s;
+  }
   s.bytes = std::filesystem::file_size(path, ec);
   if (s.bytes == 0) throw InputError(path.string(), "empty file");
   if (!uff::LooksLikeUff(path)) {
@@ -157,6 +181,18 @@ FileSummary SummarizeFile(const std::filesystem::path& path) {
     } else if (const auto* a55 = std::get_if<uff::Data55>(&d.body)) {
       if (a55->analysis_type == 2 || a55->analysis_type == 3 || a55->analysis_type == 7) ++s.modes;
       for (const auto& nv : a55->nodes) s.shape_nodes.insert(nv.node);
+    } else if (const auto* raw2414 = std::get_if<uff::RawDataset>(&d.body); raw2414 && d.number == 2414) {
+      // FE results: a mode when it decodes as data at nodes of a modal analysis (as read_modes
+      // and ema correlate read it).
+      uff::Data55 as55;
+      try {
+        if (uff::Decode2414AsData55(*raw2414, path.string() + ":" + std::to_string(d.line), &as55)) {
+          ++s.modes;
+          for (const auto& nv : as55.nodes) s.shape_nodes.insert(nv.node);
+        }
+      } catch (const InputError&) {
+        // counted only when readable; `ema correlate` names the problem
+      }
     } else if (const auto* raw = std::get_if<uff::RawDataset>(&d.body); raw && d.number == 2412) {
       for (const auto& e : uff::DecodeElements2412(*raw, path.string(), d.line).elements) {
         ++s.elements;
@@ -167,6 +203,9 @@ FileSummary SummarizeFile(const std::filesystem::path& path) {
     }
   }
   for (const auto& n : reader.FileNotes()) AddNote(&notes, n);
+  if (s.units.empty() && !s.geometry_nodes.empty())
+    AddNote(&notes, "no units dataset (164): lengths are taken as metres (geometry written in mm would read 1000x "
+                    "too large; a 164 dataset or SI geometry says so)");
   for (const auto& [n, count] : notes) s.notes.push_back(count > 1 ? n + " (x" + std::to_string(count) + ")" : n);
   return s;
 }
@@ -213,7 +252,9 @@ std::string DofSummary(const std::set<std::pair<std::int64_t, int>>& dofs) {
 
 std::string SummaryText(const FileSummary& s) {
   std::ostringstream out;
-  out << s.file << ": " << (s.format == "uff" ? "UFF" : "CSV time data") << ", " << s.bytes << " bytes\n";
+  out << s.file << ": "
+      << (s.format == "uff" ? "UFF" : s.format == "csv" ? "CSV time data" : "folder of FRF tables (as ema fit reads it)")
+      << ", " << s.bytes << " bytes\n";
   if (s.format == "uff") {
     out << "datasets:";
     for (const auto& [n, c] : s.datasets) out << " " << n << " x" << c;

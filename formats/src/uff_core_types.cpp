@@ -85,6 +85,12 @@ std::string Today() {
   return buf;
 }
 
+/// "file:LINE" of record `record` of an ASCII dataset that starts (its "-1" line) on `dataset_line`:
+/// the dataset number follows the delimiter, record 1 the number.
+std::string RecordWhere(const std::filesystem::path& path, std::int64_t dataset_line, int record) {
+  return path.string() + ":" + std::to_string(dataset_line + 1 + record);
+}
+
 /// "key=value" pairs from an ID line that starts with "ema " (our own metadata).
 std::map<std::string, std::string> EmaKeys(const std::string& id) {
   std::map<std::string, std::string> out;
@@ -134,8 +140,8 @@ std::vector<TimeRecord> ReadTimeRecords(const std::filesystem::path& path) {
     if (f.function_type != 1) continue;
     uff::ApplyEntityNameDofs(&f);
     const std::string where = path.string() + ":" + std::to_string(d.line);
-    if (f.IsComplex()) throw InputError(where, "dataset 58 record 7 field 1: a time record must be real (type 2 or 4)");
-    if (f.count < 2) throw InputError(where, "dataset 58 record 7 field 2: a time record needs at least 2 samples");
+    if (f.IsComplex()) throw InputError(RecordWhere(path, d.line, 7), "dataset 58 record 7 field 1: a time record must be real (type 2 or 4)");
+    if (f.count < 2) throw InputError(RecordWhere(path, d.line, 7), "dataset 58 record 7 field 2: a time record needs at least 2 samples");
     TimeRecord r;
     r.channel = {static_cast<int>(f.response_node), f.response_direction};
     r.reference = {static_cast<int>(f.reference_node), f.reference_direction};
@@ -149,13 +155,13 @@ std::vector<TimeRecord> ReadTimeRecords(const std::filesystem::path& path) {
       const double dt = (f.x.back() - f.x.front()) / static_cast<double>(f.count - 1);
       for (std::int64_t i = 0; i < f.count; ++i)
         if (std::abs(f.x[i] - (f.x.front() + dt * i)) > 1e-3 * dt)
-          throw InputError(where, "dataset 58 record 12: time abscissa is not uniformly spaced (point " +
+          throw InputError(RecordWhere(path, d.line, 12), "dataset 58 record 12: time abscissa is not uniformly spaced (point " +
                                       std::to_string(i + 1) + ")");
       r.sample_interval_s = SnapIncrement(dt);
       r.start_time_s = f.x.front();
     }
     if (!(r.sample_interval_s > 0.0))
-      throw InputError(where, "dataset 58 record 7 field 5: sample interval must be > 0");
+      throw InputError(RecordWhere(path, d.line, 7), "dataset 58 record 7 field 5: sample interval must be > 0");
     r.samples = f.y;
     r.unit = UnitsOf(f.axes[1]);
     r.origin = OriginOf(path, index, d);
@@ -275,10 +281,10 @@ FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Functi
       *dx = f.count > 1 ? (f.x.back() - f.x.front()) / static_cast<double>(f.count - 1) : 0.0;
       for (std::int64_t i = 0; i < f.count; ++i)
         if (std::abs(f.x[i] - (*x0 + *dx * i)) > 1e-3 * std::abs(*dx) + 1e-12)
-          throw InputError(where, "dataset 58 record 12: frequency abscissa is not uniformly spaced (point " +
+          throw InputError(RecordWhere(path, it.line, 12), "dataset 58 record 12: frequency abscissa is not uniformly spaced (point " +
                                       std::to_string(i + 1) + ")");
     }
-    if (f.count > 1 && !(*dx > 0.0)) throw InputError(where, "dataset 58 record 7 field 5: frequency increment must be > 0");
+    if (f.count > 1 && !(*dx > 0.0)) throw InputError(RecordWhere(path, it.line, 7), "dataset 58 record 7 field 5: frequency increment must be > 0");
   };
   double x0 = 0, dx = 0;
   std::int64_t n = 0;
@@ -289,7 +295,7 @@ FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Functi
     std::int64_t m;
     grid_of(it, &a, &b, &m);
     if (m > 1 && std::abs(b - dx) > 1e-5 * dx)
-      throw InputError(path.string() + ":" + std::to_string(it.line),
+      throw InputError(RecordWhere(path, it.line, 7),
                        "dataset 58 record 7 field 5: frequency increment " + uff::FormatE(b, 0, 5) +
                            " differs from the first FRF's " + uff::FormatE(dx, 0, 5));
     lo = std::min(lo, a);
@@ -327,7 +333,7 @@ FrfSet FrfSetFromFunctions(const std::filesystem::path& path, std::vector<Functi
   for (auto& it : frfs) {
     Function58& f = it.f;
     const std::string where = path.string() + ":" + std::to_string(it.line);
-    if (!f.IsComplex()) throw InputError(where, "dataset 58 record 7 field 1: an FRF must be complex (type 5 or 6)");
+    if (!f.IsComplex()) throw InputError(RecordWhere(path, it.line, 7), "dataset 58 record 7 field 1: an FRF must be complex (type 5 or 6)");
     const int o = index_of(set.outputs, {static_cast<int>(f.response_node), f.response_direction});
     const int r = index_of(set.references, {static_cast<int>(f.reference_node), f.reference_direction});
     double a, b;

@@ -14,6 +14,10 @@ namespace ema::formats::uff {
 
 std::string_view Trim(std::string_view s);
 bool IsValidUtf8(std::string_view s);
+
+/// Text read from a file as UTF-8: kept as it is when it is valid UTF-8, else read as Latin-1
+/// (what older tools write for "m/s²" or "°C") and converted, so that JSON and reports carry it.
+std::string ToUtf8(std::string_view s);
 /// A line whose content is "-1" preceded and followed only by blanks (spec §1.2).
 bool IsDelimiterLine(std::string_view line);
 /// Whitespace tokens; with split_signs also splits run-together numbers (spec §12.9 step 3).

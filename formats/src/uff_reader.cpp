@@ -41,7 +41,8 @@ std::string Quote(std::string_view s) {
   return out + (s.size() > 40 ? "...'" : "'");
 }
 
-std::string TrimmedString(std::string_view s) { return std::string(Trim(s)); }
+// Text fields come out as UTF-8 (Latin-1 labels such as "m/s²" converted: ToUtf8).
+std::string TrimmedString(std::string_view s) { return ToUtf8(Trim(s)); }
 
 /// Sequential access to a Body with fixed-column numeric helpers and token fallback.
 class Cursor {
@@ -58,7 +59,7 @@ class Cursor {
     std::string s = Line(record);
     ++index_;
     while (!s.empty() && (s.back() == ' ' || s.back() == '\r')) s.pop_back();
-    return s;
+    return ToUtf8(s);
   }
   void SkipBlankLines() {
     while (!AtEnd() && Trim(body_.lines[index_]).empty()) ++index_;

@@ -123,5 +123,121 @@ TEST(FormatsInfo, CliSummaryAndJson) {
   EXPECT_NE(s.str().find("\"binary_58\": 1"), std::string::npos) << s.str();
 }
 
+// ---- Quirks of other tools' files (issue 28), each in a small file made here ----
+
+fs::path WriteFile(const std::string& name, const std::string& bytes) {
+  fs::create_directories(EMA_TEST_TMP_DIR);
+  const fs::path p = fs::path(EMA_TEST_TMP_DIR) / (std::to_string(getpid()) + "-" + name);
+  std::ofstream(p, std::ios::binary) << bytes;
+  return p;
+}
+
+// One FRF (dataset 58, function type 4, 3 complex points); `units` is record 9's label, written as
+// given (bytes), `dx` record 7's increment.
+std::string Frf58(const std::string& units, const std::string& dx = "1.00000e+00") {
+  return "    -1\n    58\nH1 101+X/101+X\nNONE\n25-Nov-26\nNONE\nNONE\n"
+         "    4         1    0         0 NONE             101   1 NONE             101   1\n"
+         "         6         3         1  1.00000e+01  " + dx + "  0.00000e+00\n"
+         "        18    0    0    0 Frequency            Hz                  \n"
+         "        12    0    0    0 Acceleration         " + units + "\n"
+         "        13    0    0    0 Force                N                   \n"
+         "         0    0    0    0 NONE                 NONE                \n"
+         "  1.00000e+00  0.00000e+00  2.00000e+00  1.00000e+00  3.00000e+00 -1.00000e+00\n    -1\n";
+}
+
+// pyuff's non_ascii_header.uff and sample_dataset58_psd.uff: Latin-1 unit labels ("m/s²" as the
+// byte 0xB2) made `ema info --json` exit 1 (invalid UTF-8 in JSON). Now kept and converted.
+TEST(FormatsInfoQuirks, Latin1UnitLabelsAreConvertedToUtf8InJson) {
+  if (!HaveEma()) FAIL() << "ema not built";
+  const fs::path f = WriteFile("latin1.unv", Frf58("m/s\xB2"));
+  const fs::path json = fs::path(EMA_TEST_TMP_DIR) / (std::to_string(getpid()) + "-latin1.json");
+  const CliRun r = Ema("info '" + f.string() + "' --json '" + json.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream in(json);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_NE(text.str().find("m/s\xC2\xB2"), std::string::npos) << text.str();  // "m/s²" in UTF-8
+  EXPECT_NE(r.out.find("m/s\xC2\xB2"), std::string::npos) << r.out;
+}
+
+// A record-7 error was reported on the dataset's first line; record 7 is its 9th line.
+TEST(FormatsInfoQuirks, ARecordSevenErrorNamesItsOwnLine) {
+  if (!HaveEma()) FAIL() << "ema not built";
+  const fs::path f = WriteFile("record7.unv", Frf58("m/s2                ", "0.00000e+00"));
+  const CliRun r = Ema("fit '" + f.string() + "' -o '" + f.string() + ".modes.unv'");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find(f.string() + ":9: dataset 58 record 7 field 5"), std::string::npos) << r.err;
+}
+
+// FE modes as UFF 2414 (pyuff's "NX simulation output.uff": 176): `ema info` reported 0 modes
+// while read_modes read them.
+TEST(FormatsInfoQuirks, Dataset2414ModesAreCounted) {
+  if (!HaveEma()) FAIL() << "ema not built";
+  std::string text;
+  for (int mode = 1; mode <= 2; ++mode) {
+    text += "    -1\n  2414\n         " + std::to_string(mode) + "\nMode " + std::to_string(mode) +
+            "\n         1\nNONE\nNONE\nNONE\nNONE\nNONE\n"
+            "         1         2         2         8         2         3\n"
+            "         0         0         " + std::to_string(mode) + "         0         0         1         0         0\n"
+            "         0         0\n"
+            "  0.00000E+00  " + (mode == 1 ? std::string("1.00000E+02") : std::string("2.50000E+02")) +
+            "  0.00000E+00  1.00000E+00  0.00000E+00  0.00000E+00\n"
+            "  0.00000E+00  0.00000E+00  0.00000E+00  0.00000E+00  0.00000E+00  0.00000E+00\n";
+    for (int node = 1; node <= 3; ++node)
+      text += "         " + std::to_string(node) + "\n  0.00000E+00  0.00000E+00  " + std::to_string(node * mode) +
+              ".00000E+00\n";
+    text += "    -1\n";
+  }
+  const fs::path f = WriteFile("fe2414.unv", text);
+  const FileSummary s = SummarizeFile(f);
+  EXPECT_EQ(s.modes, 2) << SummaryText(s);
+  EXPECT_EQ(s.shape_nodes.size(), 3u);
+}
+
+// `ema info` failed on a folder that `ema fit` accepts (FRF tables).
+TEST(FormatsInfoQuirks, AFolderOfFrfTablesIsSummarisedAsEmaFitReadsIt) {
+  if (!HaveEma()) FAIL() << "ema not built";
+  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / (std::to_string(getpid()) + "-frf-folder");
+  fs::create_directories(dir);
+  std::ofstream(dir / "frfs.csv") << "# frequency_hz: 0:2\nfile, response, reference\na.txt, 1+X, 1+X\nb.txt, 2+X, 1+X\n";
+  std::ofstream(dir / "a.txt") << "(1+1j)\n(2+0j)\n(0.5-1j)\n";
+  std::ofstream(dir / "b.txt") << "(1-1j)\n(2+0j)\n(0.5+1j)\n";
+  const CliRun r = Ema("info '" + dir.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("folder of FRF tables"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("records: 2"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("0 .. 4 Hz"), std::string::npos) << r.out;
+}
+
+// Geometry with no units dataset (164) was silently taken as metres: now said.
+TEST(FormatsInfoQuirks, GeometryWithoutUnitsDatasetIsStated) {
+  const fs::path f = WriteFile("no164.unv",
+                               "    -1\n    15\n         1         0         0        11  0.0000000E+00  0.0000000E+00  0.0000000E+00\n"
+                               "         2         0         0        11  1.0000000E+03  0.0000000E+00  0.0000000E+00\n    -1\n");
+  const FileSummary s = SummarizeFile(f);
+  ASSERT_EQ(s.geometry_nodes.size(), 2u);
+  bool said = false;
+  for (const auto& n : s.notes) said = said || n.find("no units dataset (164)") != std::string::npos;
+  EXPECT_TRUE(said) << SummaryText(s);
+}
+
+// `ema quality --modes MODES.unv` alone failed with "the option '--input' is required".
+TEST(FormatsInfoQuirks, QualityOfModesAloneNeedsNoFrfs) {
+  if (!HaveEma()) FAIL() << "ema not built";
+  std::string text;
+  for (int m = 1; m <= 2; ++m)
+    text += "    -1\n    55\nmode\nNONE\nNONE\nNONE\nNONE\n"
+            "         1         2         2         8         5         3\n"
+            "         2         4         " + std::to_string(m) + "         " + std::to_string(m) + "\n"
+            "  " + (m == 1 ? std::string("1.00000e+02") : std::string("2.00000e+02")) + "  0.00000e+00  0.00000e+00  1.00000e+00\n"
+            "         1\n  1.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00\n"
+            "         2\n  0.50000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00\n    -1\n";
+  const fs::path f = WriteFile("modes55.unv", text);
+  const CliRun r = Ema("quality --modes '" + f.string() + "'");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("mode complexity: 2 checked"), std::string::npos) << r.out;
+  EXPECT_EQ(Ema("quality").code, 2);
+}
+
 }  // namespace
 }  // namespace ema::formats
