@@ -356,6 +356,23 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
         if (have_ml) AttachUncertainty(ml, lsfd);
         FillModel(data, result.selected, lsfd, &result.model);
         result.modes = std::move(lsfd.modes);
+        // Modes come out sorted by frequency whatever the refinement did (two close poles may
+        // cross): the modes and the selection they came from, permuted alike.
+        std::vector<size_t> order(result.modes.modes.size());
+        for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+        std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+          return result.modes.modes[a].frequency_hz < result.modes.modes[b].frequency_hz;
+        });
+        if (!std::is_sorted(order.begin(), order.end())) {
+          std::vector<Mode> modes;
+          std::vector<SelectedPole> selected;
+          for (size_t k : order) {
+            modes.push_back(result.modes.modes[k]);
+            if (k < result.selected.size()) selected.push_back(result.selected[k]);
+          }
+          result.modes.modes = std::move(modes);
+          if (selected.size() == result.selected.size()) result.selected = std::move(selected);
+        }
         result.synthesis_error = lsfd.synthesis_error;
         for (const auto& w : lsfd.warnings) result.warnings.push_back(source + ": " + w);
         break;

@@ -18,6 +18,8 @@
 
 #include <ceres/ceres.h>
 
+#include "ema/core/solver_logging.hpp"
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
@@ -277,7 +279,15 @@ struct SolveOutcome {
   std::string message;
 };
 
-SolveOutcome SolveWithCeres(const Problem& pr, const MlRefineOptions& options, std::vector<cd>* lambda) {
+// Where each pole may go: a box around its start (real and imaginary parts within `shift` of it,
+// the real part below zero) with the imaginary part inside the fitted band. A pole cannot wander
+// off to another mode or out of the band; one that ends on the box's edge is reported.
+struct PoleBox {
+  double re_lo, re_hi, im_lo, im_hi;
+};
+
+SolveOutcome SolveWithCeres(const Problem& pr, const MlRefineOptions& options, const std::vector<PoleBox>& boxes,
+                            std::vector<cd>* lambda) {
   const int nm = pr.n_modes;
   std::vector<double> theta(2 * nm);
   for (int r = 0; r < nm; ++r) {
@@ -288,6 +298,12 @@ SolveOutcome SolveWithCeres(const Problem& pr, const MlRefineOptions& options, s
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   problem.AddResidualBlock(new CompressedVarProCost(&pr), nullptr, theta.data());
+  for (int r = 0; r < nm && r < static_cast<int>(boxes.size()); ++r) {
+    problem.SetParameterLowerBound(theta.data(), 2 * r, boxes[r].re_lo);
+    problem.SetParameterUpperBound(theta.data(), 2 * r, boxes[r].re_hi);
+    problem.SetParameterLowerBound(theta.data(), 2 * r + 1, boxes[r].im_lo);
+    problem.SetParameterUpperBound(theta.data(), 2 * r + 1, boxes[r].im_hi);
+  }
   ceres::Solver::Options solver;
   solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
   solver.linear_solver_type = ceres::DENSE_QR;
@@ -298,6 +314,7 @@ SolveOutcome SolveWithCeres(const Problem& pr, const MlRefineOptions& options, s
   solver.num_threads = 1;
   solver.logging_type = ceres::SILENT;
   solver.minimizer_progress_to_stdout = false;
+  QuietSolverLogging();
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
   SolveOutcome out;
@@ -494,12 +511,24 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
   }
 
   std::vector<cd> lambda = lambda0;
+  // Each pole's neighbourhood: max_pole_shift_bandwidths half-power bandwidths (or its
+  // stabilisation spread, if wider) around its start, its frequency inside the band.
+  std::vector<PoleBox> boxes(nm);
+  const double band_lo = kTwoPi * data.frequency_hz[0], band_hi = kTwoPi * data.frequency_hz[data.LineCount() - 1];
+  for (int r = 0; r < nm; ++r) {
+    const double w0 = std::abs(lambda0[r]), z0 = -lambda0[r].real() / w0;
+    const double shift = std::max(options.max_pole_shift_bandwidths * 2.0 * std::max(z0, 1e-4) * w0,
+                                  3.0 * kTwoPi * (std::isfinite(poles[r].frequency_spread_hz) ? poles[r].frequency_spread_hz : 0.0));
+    boxes[r] = {lambda0[r].real() - shift, std::min(lambda0[r].real() + shift, -1e-9 * w0),
+                std::max(lambda0[r].imag() - shift, std::min(band_lo, lambda0[r].imag())),
+                std::min(lambda0[r].imag() + shift, std::max(band_hi, lambda0[r].imag()))};
+  }
   SolveOutcome outcome;
   if (options.estimate_only) {
     outcome.ok = outcome.converged = true;
     outcome.message = "poles kept (uncertainty only)";
   } else {
-    outcome = SolveWithCeres(pr, options, &lambda);
+    outcome = SolveWithCeres(pr, options, boxes, &lambda);
   }
   int iterations = outcome.iterations;
   result.summary.initial_cost = outcome.initial_cost;
@@ -513,14 +542,25 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
   // bandwidths (a pole that wanders off has found another mode or the noise).
   bool plausible = outcome.ok;
   std::ostringstream reason;
-  if (!outcome.ok) reason << "Ceres: " << outcome.message;
+  if (!outcome.ok)
+    reason << "the modal model could not be evaluated at the PolyMAX poles or on the way from them (an unstable or "
+              "doubled pole?); solver: " << outcome.message;
   for (int r = 0; r < nm && plausible; ++r) {
     const double f0 = std::abs(lambda0[r]), z0 = -lambda0[r].real() / f0;
     const double bandwidth = 2.0 * std::max(z0, 1e-4) * f0;
+    const PoleBox& b = boxes[r];
+    const double edge = 1e-6 * f0;
+    const bool on_edge = lambda[r].real() <= b.re_lo + edge || lambda[r].imag() <= b.im_lo + edge ||
+                         lambda[r].imag() >= b.im_hi - edge;
     if (!(lambda[r].real() < 0.0) || !(lambda[r].imag() > 0.0)) {
       plausible = false;
       reason << "pole " << r + 1 << " became unstable";
-    } else if (std::abs(lambda[r] - lambda0[r]) > options.max_pole_shift_bandwidths * bandwidth) {
+    } else if (on_edge) {
+      plausible = false;
+      reason << "the pole at " << f0 / kTwoPi << " Hz was pressed against the edge of its neighbourhood ("
+             << options.max_pole_shift_bandwidths << " half-power bandwidths, inside the band): the data pull it "
+             << "towards another mode or out of the band";
+    } else if (std::abs(lambda[r] - lambda0[r]) > options.max_pole_shift_bandwidths * bandwidth * std::sqrt(2.0)) {
       plausible = false;
       reason << "pole at " << f0 / kTwoPi << " Hz moved by " << std::abs(lambda[r] - lambda0[r]) / bandwidth
              << " half-power bandwidths";

@@ -5,6 +5,8 @@
 // posterior Hessian (Gauss–Newton, Huber weights w_b per mode block).
 #include <ceres/ceres.h>
 
+#include "ema/core/solver_logging.hpp"
+
 #include <Eigen/Dense>
 #include <cmath>
 #include <functional>
@@ -240,6 +242,7 @@ Fit FitSet(Problem* problem, const std::vector<int>& set, const std::vector<doub
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
   so.num_threads = 1;
+  QuietSolverLogging();
   ceres::Solver::Summary summary;
   ceres::Solve(so, &cp, &summary);
   std::vector<double> theta(k);
