@@ -134,6 +134,10 @@ app::FitStageResult app::RunFitStage(const FitConfig& config, const FrfSet& frfs
             << (fit_options.method == curvefit::FitMethod::kPeak ? "peak picking" : "PolyMAX");
   if (fit.transposed) out << ", roving hammer fitted by reciprocity";
   out << ")\n";
+  if (fit_options.method != curvefit::FitMethod::kPeak)
+    out << "  orders " << fit.diagram.order_min << ".." << fit.diagram.order_max
+        << (fit.diagram.zoom_mapped ? " (zoom band: its lines spread over the unit circle)" : "") << ", selection "
+        << fit.selection_rule << "\n";
   const bool any_std = std::any_of(fit.modes.modes.begin(), fit.modes.modes.end(),
                                    [](const Mode& m) { return std::isfinite(m.frequency_std_hz); });
   if (any_std) out << "  " << fit.refine.BriefReport() << "\n";

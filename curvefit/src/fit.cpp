@@ -35,6 +35,14 @@ std::vector<SelectedPole> SelectPolesNarrowBand(const StabilisationDiagram& diag
 
 namespace {
 
+// Fewer orders than this in the diagram: the narrow-band retry of automatic selection may replace
+// a strict selection that found some modes (see Fit).
+constexpr int kFewOrders = 20;
+
+// Smallest Wald statistic of a pole's residues that counts as a mode, whatever its degrees of
+// freedom (2 per FRF): chi2 with 2 dof exceeds 25 with probability 4e-6.
+constexpr double kNoisePoleChi2Floor = 25.0;
+
 // ML refinement of the selected poles (or, for --refine none, only their uncertainty). Updates the
 // poles (and, from the refined residues, the participation vectors) when the refinement is usable.
 bool RefineSelected(const FitData& data, const FitOptions& options, const std::string& source, FitResult* result,
@@ -313,10 +321,16 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
     result.selected = options.select_frequencies_hz.empty()
                           ? SelectPolesAuto(result.diagram, options.auto_select)
                           : SelectPolesNear(result.diagram, options.select_frequencies_hz);
-    if (options.select_frequencies_hz.empty()) {
+    result.selection_rule = options.select_frequencies_hz.empty() ? "automatic" : "given frequencies";
+    // The relaxed retry is for bands whose normal equations support few orders; a band that
+    // reached many orders (a zoom band spread over the circle) keeps the strict selection unless
+    // that found nothing.
+    const int orders_reached = result.diagram.order_max - result.diagram.order_min + 1;
+    if (options.select_frequencies_hz.empty() && (result.selected.empty() || orders_reached < kFewOrders)) {
       std::string note;
       std::vector<SelectedPole> relaxed = SelectPolesNarrowBand(result.diagram, options, &note);
       if (relaxed.size() > result.selected.size()) {
+        result.selection_rule = "automatic, narrow band";
         result.selected = std::move(relaxed);
         result.warnings.push_back(source + ": " + note);
       }
@@ -350,6 +364,36 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
             result.warnings.push_back(source + ": pole at " + std::to_string(dropped.frequency_hz) + " Hz dropped: " +
                                       dropped.reason);
             result.selected.erase(result.selected.begin() + drop);
+            continue;
+          }
+        }
+        // Automatic selection only: a pole whose residues, over all FRFs, stand no clearer above
+        // their uncertainty than noise would (the Wald statistic of a pole fitted to noise is
+        // ~ its degrees of freedom, a little more for the place it chose) models noise, not a mode.
+        if (options.select_frequencies_hz.empty() && have_ml && result.selected.size() > 1) {
+          int weakest = -1;
+          double weakest_ratio = 1.0;
+          for (size_t r = 0; r < ml.poles.size() && r < result.selected.size(); ++r) {
+            const RefinedPole& p = ml.poles[r];
+            if (p.residue_dof <= 0 || !(p.residue_chi2 > 0.0)) continue;
+            const double threshold = std::max(kNoisePoleChi2Floor, p.residue_dof + 6.0 * std::sqrt(2.0 * p.residue_dof));
+            const double ratio = p.residue_chi2 / threshold;
+            if (ratio < weakest_ratio) weakest = static_cast<int>(r), weakest_ratio = ratio;
+          }
+          if (weakest >= 0) {
+            const RefinedPole& p = ml.poles[weakest];
+            DroppedPole dropped;
+            dropped.frequency_hz = result.selected[weakest].pole.frequency_hz;
+            std::ostringstream why;
+            why.precision(3);
+            why << "its residues stand no clearer above the noise than a pole fitted to noise would (Wald chi2 "
+                << p.residue_chi2 << " on " << p.residue_dof << " degrees of freedom)";
+            dropped.reason = why.str();
+            result.warnings.resize(warnings_before);
+            result.dropped.push_back(dropped);
+            result.warnings.push_back(source + ": pole at " + std::to_string(dropped.frequency_hz) + " Hz dropped: " +
+                                      dropped.reason);
+            result.selected.erase(result.selected.begin() + weakest);
             continue;
           }
         }

@@ -224,12 +224,45 @@ double ThreadCpuSeconds() {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+FrequencyMap MapBandToUnitCircle(const FitData& data) {
+  const int n = data.LineCount();
+  const double df = data.line_spacing_hz, f_lo = data.frequency_hz[0], f_hi = data.frequency_hz[n - 1];
+  FrequencyMap map;
+  // Full band (§2.9): f_hi at angle ~pi, N' = 2 f_hi/df, no aliasing.
+  map.fft_length = std::max(static_cast<int>(std::ceil(2.0 * f_hi / df - 1e-9)), n);
+  map.dt = 1.0 / (map.fft_length * df);
+  const double fraction = (f_hi - f_lo) / f_hi;
+  if (!(fraction < kZoomBandFraction) || n < 8) return map;
+  // Zoom band: on the full-band map it covers an arc of only fraction·pi, where z^0..z^p are
+  // nearly collinear and the normal equations turn singular after a handful of orders (a 2 Hz
+  // stepped-sine band at 80 Hz: order 4). A longer dt spreads the band over most of the upper
+  // half circle; the frequencies below it wrap round the circle k times (aliasing), which costs
+  // nothing because only the band's lines are fitted. The band must land inside (0, pi) so that
+  // each in-band pole's conjugate lies outside it: choose N' with the band's start at angle
+  // a·2pi and its end at (a + s)·2pi, s = (n-1)/N', inside [0.03, 0.47]; prefer the band centred
+  // near pi/2 and spanning as much as possible.
+  double best_score = std::numeric_limits<double>::infinity();
+  const int lo = static_cast<int>(std::ceil((n - 1) / 0.44)), hi = 6 * (n - 1);
+  for (int n_fft = lo; n_fft <= hi; ++n_fft) {
+    const double s = (n - 1.0) / n_fft, turns = f_lo / (df * n_fft);
+    const double a = turns - std::floor(turns);
+    if (a < 0.03 || a + s > 0.47) continue;
+    const double score = std::abs(a + 0.5 * s - 0.25) + 0.5 * (0.44 - s);
+    if (score < best_score) {
+      best_score = score;
+      map.fft_length = n_fft;
+      map.dt = 1.0 / (n_fft * df);
+      map.alias_rad_s = kTwoPi * std::floor(turns) / map.dt;
+    }
+  }
+  return map;
+}
+
 int MaxSupportedOrder(const FitData& data) {
   // A polynomial of order p has p+1 real coefficients per numerator; ask for at least as many
   // valid complex lines as that (twice as many real equations), and lags below half the FFT.
   const int lines = data.UsedLineCount();
-  const double f_hi = data.frequency_hz[data.LineCount() - 1];
-  const int n_fft = static_cast<int>(std::ceil(2.0 * f_hi / data.line_spacing_hz - 1e-9));
+  const int n_fft = MapBandToUnitCircle(data).fft_length;
   return std::max(0, std::min(lines - 1, (n_fft - 1) / 2));
 }
 
@@ -260,11 +293,14 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
   diagram.sum_frf = data.h.cwiseAbs().rowwise().sum();
   diagram.warnings = data.warnings;
 
-  // Frequency normalisation (§2.9): the highest line maps to angle ~pi; dt = 1/(N' df) with an
-  // integer FFT length N' so that the lag sums come from FFTs.
-  const double df = data.line_spacing_hz, f0 = data.frequency_hz[0], f_hi = data.frequency_hz[n - 1];
-  const int n_fft = std::max(static_cast<int>(std::ceil(2.0 * f_hi / df - 1e-9)), n);
-  const double dt = 1.0 / (n_fft * df);
+  // Frequency normalisation (§2.9): the highest line maps to angle ~pi (a zoom band: most of
+  // the upper half circle); dt = 1/(N' df) with an integer FFT length N' so that the lag sums
+  // come from FFTs.
+  const double f0 = data.frequency_hz[0];
+  const FrequencyMap map = MapBandToUnitCircle(data);
+  const int n_fft = map.fft_length;
+  const double dt = map.dt;
+  diagram.zoom_mapped = map.alias_rad_s > 0.0;
   int P = order_max;
 
   // Weighted data: per-output 1/RMS, skipped lines zeroed (weights may vary per (o, f), §2.5).
@@ -395,7 +431,7 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
         if (!(om.imag() < 0.0) || std::abs(om) == 0.0) continue;  // Im(lambda) > 0 member only
         Pole pole;
         pole.order = p;
-        pole.lambda_fitted = -std::log(om) / dt;
+        pole.lambda_fitted = -std::log(om) / dt + std::complex<double>(0.0, map.alias_rad_s);
         pole.lambda = pole.lambda_fitted + data.window_decay_rate;
         PoleToFrequencyAndDamping(pole.lambda, &pole.frequency_hz, &pole.damping_ratio);
         pole.physical = pole.damping_ratio > 0.0 && pole.damping_ratio < options.damping_max &&

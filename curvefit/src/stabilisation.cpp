@@ -291,11 +291,14 @@ std::vector<SelectedPole> SelectPolesNear(const StabilisationDiagram& diagram, c
     }
     if (best) {
       // The nearest pole fixes the column; within it take the highest order (most converged).
+      // The column is the poles of that label near it in frequency and damping: a zoom band's
+      // high orders put noise poles of other damping within the same 0.5 % of frequency.
       const Pole* column_best = best;
       for (const auto& p : diagram.orders)
         for (const auto& pole : p)
           if (pole.physical && pole.label == best->label &&
               std::abs(pole.frequency_hz - best->frequency_hz) < 0.005 * best->frequency_hz &&
+              std::abs(pole.damping_ratio - best->damping_ratio) < 0.25 * best->damping_ratio &&
               pole.order > column_best->order)
             column_best = &pole;
       best = column_best;

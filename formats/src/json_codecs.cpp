@@ -173,6 +173,10 @@ json FitModesJson(const curvefit::FitResult& fit, curvefit::RefineMethod refine)
   }
   out["synthesis_error"] = fit.synthesis_error;
   out["reciprocity_transposed"] = fit.transposed;
+  if (!fit.diagram.orders.empty())
+    out["polymax"] = {{"orders", {fit.diagram.order_min, fit.diagram.order_max}},
+                      {"zoom_band", fit.diagram.zoom_mapped},
+                      {"selection", fit.selection_rule}};
   if (!fit.dropped.empty()) {
     json dropped = json::array();
     for (const auto& d : fit.dropped)

@@ -4,6 +4,8 @@
 // 1 % complex noise (synthetic.hpp).
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "ema/core/error.hpp"
 #include "ema/curvefit/fit.hpp"
 #include "synthetic.hpp"
@@ -59,6 +61,72 @@ TEST(NarrowBand, PeakPickingFindsTheModeIn41Lines) {
     EXPECT_NEAR(r.modes.modes[0].frequency_hz, 100.0, zeta > 0.02 ? 0.2 : 0.1) << zeta;
     // Half-power damping from interpolated crossings: within 25 % (a 0.5 % mode is 1 Hz wide: two lines).
     EXPECT_NEAR(r.modes.modes[0].damping_ratio, zeta, 0.25 * zeta) << zeta;
+  }
+}
+
+}  // namespace
+}  // namespace ema::curvefit
+
+namespace ema::curvefit {
+namespace {
+
+// A stepped-sine measurement (issue 28): one driving-point FRF, 41 lines over 2 Hz around one
+// mode, nothing else in the file (the axis starts at the first line, not at 0 Hz). The band is
+// 79.3..81.3 Hz; the mode at f0 (ζ), complex noise of `noise` × the peak magnitude.
+FrfSet SteppedSine(double f0, double zeta, double noise, unsigned seed, int k_pow = 2) {
+  FrfSet set;
+  set.frequency_hz = Eigen::VectorXd::LinSpaced(41, 79.3, 81.3);
+  set.outputs = {{1, 3}};
+  set.references = {{1, 3}};
+  set.output_quantity = k_pow == 2 ? Quantity::kAcceleration : Quantity::kDisplacement;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const std::complex<double> lam = FrequencyAndDampingToPole(f0, zeta);
+  const std::complex<double> res = 0.3 / std::complex<double>(0.0, 2.0 * lam.imag());
+  Eigen::MatrixXcd h(41, 1);
+  for (int k = 0; k < 41; ++k) {
+    const std::complex<double> jw(0.0, kTwoPi * set.frequency_hz[k]);
+    h(k, 0) = (res / (jw - lam) + std::conj(res) / (jw - std::conj(lam))) * std::pow(jw, k_pow);
+  }
+  const double peak = h.cwiseAbs().maxCoeff();
+  for (int k = 0; k < 41; ++k) h(k, 0) += noise * peak * std::complex<double>(gauss(rng), gauss(rng)) / std::sqrt(2.0);
+  set.h.push_back(h);
+  return set;
+}
+
+// Before the zoom map the normal equations of this band turned singular above order 4 and no
+// pole stayed stable ("no pole stayed stable over the PolyMAX orders 1..4"); with `--select 80.3`
+// the mode was fitted. Now the automatic fit finds exactly that mode, within 0.05 % of the
+// `--select` fit (issue 28), for light to moderate damping and 20 noise draws each.
+TEST(NarrowBand, SteppedSineSingleModeIsFoundWithoutSelect) {
+  for (double zeta : {0.001, 0.003, 0.01}) {
+    for (unsigned seed = 1; seed <= 20; ++seed) {
+      const FrfSet frfs = SteppedSine(80.3, zeta, 0.005, seed);
+      const FitResult r = Fit(frfs, FitOptions{});
+      EXPECT_TRUE(r.diagram.zoom_mapped);
+      EXPECT_GE(r.diagram.order_max, 30) << "the band supports high orders on the zoom map";
+      ASSERT_EQ(r.modes.modes.size(), 1u) << "zeta " << zeta << " seed " << seed;
+      FitOptions hint;
+      hint.select_frequencies_hz = {80.3};
+      const FitResult s = Fit(frfs, hint);
+      ASSERT_EQ(s.modes.modes.size(), 1u);
+      EXPECT_NEAR(r.modes.modes[0].frequency_hz / s.modes.modes[0].frequency_hz, 1.0, 5e-4) << zeta << " " << seed;
+      // The issue's 0.05 % (0.04 Hz); the fits land within 0.006 Hz (0.5 % noise of the peak).
+      EXPECT_NEAR(r.modes.modes[0].frequency_hz, 80.3, 5e-4 * 80.3) << zeta << " " << seed;
+      // Damping within 10 %: the pole is the physical one, not a noise pole at the same place.
+      EXPECT_NEAR(r.modes.modes[0].damping_ratio, zeta, 0.1 * zeta) << zeta << " " << seed;
+    }
+  }
+}
+
+// The same band read as receptance (k = 0) and a mode off-centre (80.9 Hz in 79.3..81.3 Hz).
+TEST(NarrowBand, SteppedSineOffCentreReceptance) {
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const FrfSet frfs = SteppedSine(80.9, 0.002, 0.005, seed, 0);
+    const FitResult r = Fit(frfs, FitOptions{});
+    ASSERT_EQ(r.modes.modes.size(), 1u) << seed;
+    EXPECT_NEAR(r.modes.modes[0].frequency_hz, 80.9, 5e-4 * 80.9) << seed;
+    EXPECT_NEAR(r.modes.modes[0].damping_ratio, 0.002, 0.1 * 0.002) << seed;
   }
 }
 

@@ -132,7 +132,10 @@ struct FitResult {
   FitTiming timing;
   MlRefineSummary refine;             ///< what the refinement did (termination kFailed when not run)
   ModalModel model;                   ///< poles, residues and residual terms behind `modes`
-  std::vector<DroppedPole> dropped;   ///< selected poles dropped as duplicates of a kept mode
+  std::vector<DroppedPole> dropped;   ///< selected poles dropped (duplicates of a kept mode, noise poles)
+  /// How the poles were chosen: "given frequencies" (--select), "automatic" (stable clusters) or
+  /// "automatic, narrow band" (relaxed criteria: damping within 20 %, clusters over 3 orders).
+  std::string selection_rule;
 };
 
 /// `source` names the input in messages. Throws InputError for bad input (see PrepareFitData and

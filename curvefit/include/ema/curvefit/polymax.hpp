@@ -50,6 +50,7 @@ struct StabilisationDiagram {
   double band_lo_hz = 0.0, band_hi_hz = 0.0;
   Eigen::VectorXd frequency_hz;           ///< lines of the band
   Eigen::VectorXd sum_frf;                ///< sum over all FRFs of |H| (mode indicator)
+  bool zoom_mapped = false;               ///< the band was spread over the circle (FrequencyMap)
   std::vector<std::string> warnings;
 };
 
@@ -70,6 +71,19 @@ double ThreadCpuSeconds();
 /// lines than the requested order needs.
 StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& options,
                                    const ProgressCallback& progress = {}, PolymaxTiming* timing = nullptr);
+
+/// How the band's frequencies map onto the unit circle, Omega = exp(-j w dt) (algorithms.md §2.9).
+struct FrequencyMap {
+  int fft_length = 0;        ///< N': dt = 1/(N' df), the lag sums are FFTs of this length
+  double dt = 0.0;           ///< s
+  /// 0 for the full-band map (f_hi at angle ~pi). For a zoom band (narrower than
+  /// kZoomBandFraction of f_hi) the band is spread over most of the upper half circle and the
+  /// frequencies below it wrap round; a pole's frequency is then its angle/dt plus this (rad/s).
+  double alias_rad_s = 0.0;
+};
+/// Bands narrower than this fraction of their upper frequency get the zoom map.
+inline constexpr double kZoomBandFraction = 0.125;
+FrequencyMap MapBandToUnitCircle(const FitData& data);
 
 /// Highest order the data support (lines needed per order) and the automatic default.
 int MaxSupportedOrder(const FitData& data);
