@@ -367,6 +367,11 @@ bool MlRefineOptions::IsValid(std::string* error) const {
 
 std::string MlRefineSummary::BriefReport() const {
   std::ostringstream s;
+  if (uncertainty_only) {
+    s << "no refinement (--refine none): sigma of the PolyMAX poles from the Fisher information, noise from "
+      << NoiseSourceToString(noise_source) << ", reduced chi2 " << reduced_chi2;
+    return s.str();
+  }
   s << "ML refinement: " << RefineTerminationToString(termination) << ", " << iterations << " iterations, noise from "
     << NoiseSourceToString(noise_source) << ", cost " << initial_cost << " -> " << final_cost << ", reduced chi2 "
     << reduced_chi2;
@@ -527,6 +532,7 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
   if (options.estimate_only) {
     outcome.ok = outcome.converged = true;
     outcome.message = "poles kept (uncertainty only)";
+    result.summary.uncertainty_only = true;
   } else {
     outcome = SolveWithCeres(pr, options, boxes, &lambda);
   }

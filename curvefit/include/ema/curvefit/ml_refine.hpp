@@ -114,6 +114,7 @@ struct MlRefineSummary {
   double final_cost = 0.0;
   double reduced_chi2 = kNaN;     ///< final_cost / (residuals - parameters); ~1 when the noise model fits
   double seconds = 0.0;           ///< CPU time of the calling thread
+  bool uncertainty_only = false;  ///< MlRefineOptions::estimate_only: the poles were kept, only σ computed
 
   std::string BriefReport() const;
   bool IsSolutionUsable() const {
