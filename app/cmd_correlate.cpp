@@ -70,6 +70,11 @@ app::CorrelateStageResult app::RunCorrelateStage(const CorrelateConfig& config, 
                                                  const ModeSet& model_modes, std::ostream& out) {
   CorrelateStageResult stage;
   stage.result = correlation::Correlate(test, model_modes, config.options);
+  // Positions matter only where nodes were paired by distance; say then when a file's length
+  // unit was a guess (geometry in mm read as metres would pair nothing, or the wrong nodes).
+  if (stage.result.dof_match.nodes_by_distance > 0 || config.options.dofs.tolerance_m > 0.0)
+    for (const ModeSet* set : {&test, &model_modes})
+      if (!set->geometry_units_note.empty()) std::cerr << "warning: " << set->geometry_units_note << "\n";
   stage.json = formats::CorrelationJson(stage.result, test, model_modes);
   out << correlation::FormatCorrelationTable(stage.result, correlation::TableFormat::kMarkdown);
   if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, stage.json.dump(2) + "\n");

@@ -1,39 +1,51 @@
-// The `ema` Python module: the library's FRF, fit, correlation and data-quality functions on
-// numpy arrays (pybind11). Results are plain dicts of numpy arrays, lists and numbers, with the
-// same names and values as the CLI's JSON (python/tests compares them to the last digit).
+// The `ema` Python module: the library's FRF, fit, correlation, diagnosis and data-quality
+// functions on numpy arrays (pybind11). Results are plain dicts of numpy arrays, lists and numbers,
+// with the same names and values as the CLI's JSON (python/tests compares them to the last digit).
+// Built as `ema._ema`, the compiled core of the `ema` package (python/ema/: __init__.py re-exports
+// it, _ema.pyi types it; docs/python.md).
 #include <pybind11/complex.h>
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <unistd.h>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
+#include "amplitude_levels.hpp"
 #include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/core/error.hpp"
 #include "ema/correlation/correlate.hpp"
-// The diagnosis moved from correlation/ to its own module (diagnose/); build against either.
-#if __has_include("ema/diagnose/diagnose.hpp")
-#include "ema/diagnose/diagnose.hpp"
-#define EMA_PY_DIAGNOSE_MODULE 1
-#else
-#include "ema/correlation/diagnose.hpp"
-#define EMA_PY_DIAGNOSE_MODULE 0
-#endif
 #include "ema/correlation/mac.hpp"
 #include "ema/curvefit/complexity.hpp"
 #include "ema/curvefit/fit.hpp"
 #include "ema/curvefit/mode_indicators.hpp"
+#include "ema/diagnose/diagnose.hpp"
 #include "ema/formats/io.hpp"
+#include "ema/formats/json_codecs.hpp"
 #include "ema/formats/model_file.hpp"
-#include "ema/model/solve.hpp"
 #include "ema/frf/hammer_frf.hpp"
 #include "ema/frf/quality.hpp"
+#include "ema/model/effects.hpp"
+#include "ema/model/solve.hpp"
 #include "quality_json.hpp"
+
+#ifndef EMA_VERSION
+#define EMA_VERSION "unknown"
+#endif
 
 namespace py = pybind11;
 
@@ -122,6 +134,9 @@ py::dict FrfDict(const FrfSet& s) {
   d["quantity"] = QuantityName(s.output_quantity);
   d["roving_hammer"] = s.roving_hammer;
   d["window_decay_rate"] = s.window_decay_rate;
+  // Per output, the roving set it was measured in (empty when unknown): ema.fit gives each set its
+  // own poles and reports the sets, which diagnose(..., sensor_mass=...) needs.
+  d["output_sets"] = s.output_sets;
   return d;
 }
 
@@ -174,6 +189,12 @@ FrfSet ToFrfSet(const py::object& o) {
   }
   if (d.contains("roving_hammer")) s.roving_hammer = d["roving_hammer"].cast<bool>();
   if (d.contains("window_decay_rate")) s.window_decay_rate = d["window_decay_rate"].cast<double>();
+  if (d.contains("output_sets") && !d["output_sets"].is_none()) {
+    s.output_sets = d["output_sets"].cast<std::vector<int>>();
+    if (!s.output_sets.empty() && s.output_sets.size() != s.outputs.size())
+      throw py::value_error("frfs['output_sets']: expected one roving-set number per output (" +
+                            std::to_string(s.outputs.size()) + "), got " + std::to_string(s.output_sets.size()));
+  }
   return s;
 }
 
@@ -212,31 +233,199 @@ py::dict ModesDict(const ModeSet& set) {
   return d;
 }
 
-/// A path (UFF 55/2414) or a dict with "frequency_hz", "dofs", "shapes" (and optionally
-/// "damping_ratio").
-ModeSet ToModeSet(const py::object& o) {
-  if (py::isinstance<py::str>(o) || py::hasattr(o, "__fspath__"))
-    return ema::formats::ReadModeSet(py::str(o).cast<std::string>());
-  const auto d = o.cast<py::dict>();
+// ------------------------------------------------------------------------------------------------
+// Arguments: paths, mappings, objects.
+
+/// str, bytes or os.PathLike.
+bool IsPath(const py::handle& o) {
+  return py::isinstance<py::str>(o) || py::isinstance<py::bytes>(o) || py::hasattr(o, "__fspath__");
+}
+
+std::string PathOf(const py::handle& o) { return py::module_::import("os").attr("fsdecode")(o).cast<std::string>(); }
+
+bool IsMapping(const py::handle& o) {
+  return py::isinstance(o, py::module_::import("collections.abc").attr("Mapping"));
+}
+
+std::string TypeName(const py::handle& o) { return py::str(py::type::handle_of(o).attr("__name__")).cast<std::string>(); }
+
+template <class T>
+T Cast(const py::handle& o, const std::string& label, const char* expected) {
+  try {
+    return o.cast<T>();
+  } catch (const py::cast_error&) {
+    throw py::type_error(label + ": expected " + expected + ", found " + TypeName(o));
+  }
+}
+
+/// The keys of a dict — or the attributes of any other object (a dataclass, a SimpleNamespace) —
+/// that describes a model or a part. A dict with a key outside `keys` is an error, as an unknown
+/// key of the model file is.
+class Fields {
+ public:
+  Fields(const py::handle& o, std::string label, std::vector<std::string> keys)
+      : o_(py::reinterpret_borrow<py::object>(o)), label_(std::move(label)), keys_(std::move(keys)), mapping_(IsMapping(o)) {
+    if (!mapping_) return;
+    for (const auto& k : o_.attr("keys")()) {
+      const std::string key = py::str(k).cast<std::string>();
+      if (std::find(keys_.begin(), keys_.end(), key) != keys_.end()) continue;
+      std::string allowed;
+      for (const auto& a : keys_) allowed += (allowed.empty() ? "'" : ", '") + a + "'";
+      throw ema::InputError(label_, "unknown key '" + key + "'; expected " + allowed);
+    }
+  }
+  /// The value, or None when it is not given.
+  py::object Get(const std::string& key) const {
+    if (mapping_) return o_.attr("get")(key);
+    return py::getattr(o_, key.c_str(), py::none());
+  }
+  std::string At(const std::string& key) const { return label_ + "['" + key + "']"; }
+  const std::string& label() const { return label_; }
+
+ private:
+  py::object o_;
+  std::string label_;
+  std::vector<std::string> keys_;
+  bool mapping_;
+};
+
+// ------------------------------------------------------------------------------------------------
+// Mode sets: a path (UFF 55/2414 or MODES.json), a dict in `ema fit --json`'s layout, or a dict of
+// arrays as ModesDict makes.
+
+/// Per-mode numbers of a modes dict (`key`: one per mode), or empty when the key is absent or None.
+std::vector<double> OptionalPerMode(const py::dict& d, const char* key, py::ssize_t modes, const std::string& label) {
+  if (!d.contains(key) || d[key].is_none()) return {};
+  const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>(d[key]);
+  if (a.ndim() != 1 || a.size() != modes)
+    throw py::value_error(label + "['" + key + "']: expected one value per mode (" + std::to_string(modes) + ")");
+  return {a.data(), a.data() + a.size()};
+}
+
+/// A dict of arrays (ModesDict's layout): "frequency_hz", "dofs", "shapes"; optionally
+/// "damping_ratio", the 1σ "frequency_std_hz" and "damping_ratio_std", "pole", "mpc", "mpd_deg",
+/// "mcf", "geometry".
+ModeSet ModeSetFromArrays(const py::dict& d, const std::string& label) {
+  for (const char* key : {"frequency_hz", "dofs", "shapes"})
+    if (!d.contains(key)) throw py::value_error(label + ": missing '" + key + "' (a modes dict as ema.fit returns it)");
   ModeSet set;
   for (auto h : d["dofs"].cast<py::sequence>()) set.dofs.push_back(ToDof(h));
   const auto f = py::array_t<double, py::array::c_style | py::array::forcecast>(d["frequency_hz"]);
   const auto s = py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>(d["shapes"]);
   if (s.ndim() != 2 || s.shape(0) != static_cast<py::ssize_t>(set.dofs.size()) || s.shape(1) != f.size())
-    throw py::value_error("modes['shapes']: expected shape (dofs, modes)");
-  py::array_t<double, py::array::c_style | py::array::forcecast> z;
-  if (d.contains("damping_ratio")) z = py::array_t<double, py::array::c_style | py::array::forcecast>(d["damping_ratio"]);
+    throw py::value_error(label + "['shapes']: expected shape (dofs, modes)");
+  const py::ssize_t n = f.size();
+  const std::vector<double> z = OptionalPerMode(d, "damping_ratio", n, label);
+  const std::vector<double> f_std = OptionalPerMode(d, "frequency_std_hz", n, label);
+  const std::vector<double> z_std = OptionalPerMode(d, "damping_ratio_std", n, label);
+  const std::vector<double> mpc = OptionalPerMode(d, "mpc", n, label);
+  const std::vector<double> mpd = OptionalPerMode(d, "mpd_deg", n, label);
+  const std::vector<double> mcf = OptionalPerMode(d, "mcf", n, label);
+  std::vector<std::complex<double>> poles;
+  if (d.contains("pole") && !d["pole"].is_none()) {
+    const auto p = py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>(d["pole"]);
+    if (p.ndim() != 1 || p.size() != n) throw py::value_error(label + "['pole']: expected one pole per mode");
+    poles.assign(p.data(), p.data() + p.size());
+  }
   auto sr = s.unchecked<2>();
-  for (py::ssize_t r = 0; r < f.size(); ++r) {
+  for (py::ssize_t r = 0; r < n; ++r) {
     ema::Mode m;
+    const auto i = static_cast<size_t>(r);
     m.frequency_hz = f.data()[r];
-    m.damping_ratio = z.size() == f.size() ? z.data()[r] : 0.0;
-    m.pole = ema::FrequencyAndDampingToPole(m.frequency_hz, m.damping_ratio);
+    m.damping_ratio = z.empty() ? 0.0 : z[i];
+    // The fit's own pole when the dict carries it (ema.fit), else the one of (f, ζ).
+    m.pole = poles.empty() ? ema::FrequencyAndDampingToPole(m.frequency_hz, m.damping_ratio) : poles[i];
+    if (!f_std.empty()) m.frequency_std_hz = f_std[i];
+    if (!z_std.empty()) m.damping_ratio_std = z_std[i];
+    if (!mpc.empty()) m.mpc = mpc[i];
+    if (!mpd.empty()) m.mpd = mpd[i];
+    if (!mcf.empty()) m.mcf = mcf[i];
     m.shape.resize(static_cast<Eigen::Index>(set.dofs.size()));
-    for (py::ssize_t i = 0; i < s.shape(0); ++i) m.shape[i] = sr(i, r);
+    for (py::ssize_t k = 0; k < s.shape(0); ++k) m.shape[k] = sr(k, r);
     set.modes.push_back(std::move(m));
   }
+  if (d.contains("geometry") && !d["geometry"].is_none())
+    for (auto g : d["geometry"].cast<py::sequence>()) {
+      const auto t = g.cast<py::sequence>();
+      if (t.size() != 4) throw py::value_error(label + "['geometry']: expected [(node, x, y, z), ...]");
+      set.geometry.push_back({t[0].cast<int>(), {t[1].cast<double>(), t[2].cast<double>(), t[3].cast<double>()}});
+    }
+  set.source = label;
   return set;
+}
+
+/// A file that is removed when it goes out of scope.
+struct TemporaryFile {
+  std::filesystem::path path;
+  explicit TemporaryFile(const std::string& text) {
+    std::string name = (std::filesystem::temp_directory_path() / "ema-modes-XXXXXX").string();
+    const int fd = mkstemp(name.data());
+    if (fd < 0) throw std::runtime_error("cannot create a temporary file in " + std::filesystem::temp_directory_path().string());
+    close(fd);
+    path = name;
+    std::ofstream out(path, std::ios::binary);
+    out << text;
+    if (!out.flush()) throw std::runtime_error("cannot write the temporary file " + name);
+  }
+  ~TemporaryFile() {
+    std::error_code ec;
+    std::filesystem::remove(path, ec);
+  }
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+};
+
+std::string ReplaceAll(std::string text, const std::string& from, const std::string& to) {
+  for (size_t at = text.find(from); !from.empty() && at != std::string::npos; at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+  return text;
+}
+
+/// A dict in `ema fit --json`'s layout ({"modes": [{"frequency_hz", "frequency_std_hz",
+/// "damping_ratio", "shape": [{"node", "dir", "value"}]}]}, model-format.md): read by the reader of
+/// MODES.json files itself, so a dict means what the same JSON in a file means to `ema diagnose`
+/// and fails with the same messages (naming `label` instead of a file). The roving sets, when the
+/// dict lists them ("roving_sets", "reference"), go to *roving_sets / *reference.
+ModeSet ModeSetFromJsonLayout(const py::handle& d, const std::string& label, std::vector<std::vector<int>>* roving_sets,
+                              Dof* reference) {
+  const py::module_ json = py::module_::import("json");
+  // numpy numbers and arrays as plain numbers and lists.
+  const py::cpp_function plain([](const py::object& o) -> py::object {
+    if (py::hasattr(o, "tolist")) return o.attr("tolist")();
+    throw py::type_error("a " + TypeName(o) + " is not a number, list or dict");
+  });
+  std::string text;
+  try {
+    text = json.attr("dumps")(d, py::arg("allow_nan") = false, py::arg("default") = plain).cast<std::string>();
+  } catch (py::error_already_set& e) {
+    if (!e.matches(PyExc_ValueError) && !e.matches(PyExc_TypeError)) throw;
+    throw ema::InputError(label, "not in `ema fit --json`'s layout (" + py::str(e.value()).cast<std::string>() +
+                                     "); numbers must be finite: None for a value not known");
+  }
+  const TemporaryFile file(text);
+  ModeSet set;
+  try {
+    set = ema::formats::ReadModeSet(file.path);
+  } catch (const ema::InputError& e) {
+    throw ema::InputError(ReplaceAll(e.what(), file.path.string(), label));
+  }
+  set.source = label;
+  if (roving_sets && reference) ema::formats::ReadTestSets(nlohmann::json::parse(text), roving_sets, reference);
+  return set;
+}
+
+/// True for a dict in `ema fit --json`'s layout: a "modes" list.
+bool IsJsonLayout(const py::handle& o) {
+  return IsMapping(o) && o.attr("__contains__")("modes").cast<bool>() && !py::isinstance<py::str>(o.attr("get")("modes")) &&
+         py::isinstance<py::sequence>(o.attr("get")("modes"));
+}
+
+/// A path (UFF 55/2414 or MODES.json), a dict in `ema fit --json`'s layout, or a modes dict of arrays.
+ModeSet ToModeSet(const py::object& o, const std::string& label = "modes") {
+  if (IsPath(o)) return ema::formats::ReadModeSet(PathOf(o));
+  if (IsJsonLayout(o)) return ModeSetFromJsonLayout(o, label, nullptr, nullptr);
+  if (!IsMapping(o)) throw py::type_error(label + ": expected a path or a modes dict, found " + TypeName(o));
+  return ModeSetFromArrays(py::dict(o), label);
 }
 
 std::pair<double, double> Band(const py::object& band) {
@@ -249,65 +438,360 @@ std::pair<double, double> Band(const py::object& band) {
 /// nlohmann::json to Python via the json module (plain dict/list/float/None).
 py::object FromJson(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
-#if EMA_PY_DIAGNOSE_MODULE
-namespace dg = ema::diagnose;
-#else
-namespace dg = ema::correlation;
-#endif
+// ------------------------------------------------------------------------------------------------
+// Models: a model file, or an FE model built from parts given in Python (model-format.md "FE
+// models built from parts"): the same ema::model::Model the model file makes.
 
-py::object Num(double v) { return std::isfinite(v) ? py::object(py::float_(v)) : py::object(py::none()); }
+using SparseMatrix = Eigen::SparseMatrix<double>;
 
-py::dict CandidateDict(const dg::Candidate& c) {
-  py::dict d, parameters, uncertainty;
-#if EMA_PY_DIAGNOSE_MODULE
-  const std::vector<std::string> keys = dg::ParameterKeys(c);
-  d["probability"] = Num(c.probability);
-  d["mean_agreement_pct"] = Num(c.mean_agreement_pct);
-#else
-  std::vector<std::string> keys;
-  for (const auto& p : c.parameters) keys.push_back(c.effects.size() > 1 ? p.effect_kind + "." + p.name : p.name);
-#endif
-  for (size_t i = 0; i < c.parameters.size() && i < keys.size(); ++i) {
-    parameters[py::str(keys[i])] = c.parameters[i].value;
-    uncertainty[py::str(keys[i])] = Num(c.parameters[i].sigma);
+/// A scipy.sparse matrix or array (anything with .tocoo()) or a dense 2-D array, n × n.
+SparseMatrix ToSparse(const py::handle& o, Eigen::Index n, const std::string& label) {
+  std::vector<Eigen::Triplet<double>> entries;
+  long long rows = 0, cols = 0;
+  auto add = [&](long long i, long long j, double v) {
+    if (!std::isfinite(v))
+      throw ema::InputError(label, "entry [" + std::to_string(i) + ", " + std::to_string(j) + "] is not a finite number");
+    if (v != 0.0) entries.emplace_back(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j), v);
+  };
+  if (py::hasattr(o, "tocoo")) {
+    const py::object coo = o.attr("tocoo")();
+    const auto shape = Cast<std::pair<long long, long long>>(coo.attr("shape"), label, "a 2-D matrix");
+    rows = shape.first, cols = shape.second;
+    const auto r = py::array_t<long long, py::array::c_style | py::array::forcecast>(coo.attr("row"));
+    const auto c = py::array_t<long long, py::array::c_style | py::array::forcecast>(coo.attr("col"));
+    const auto v = py::array_t<double, py::array::c_style | py::array::forcecast>(coo.attr("data"));
+    if (rows == n && cols == n) {
+      entries.reserve(static_cast<size_t>(v.size()));
+      for (py::ssize_t k = 0; k < v.size(); ++k) add(r.data()[k], c.data()[k], v.data()[k]);
+    }
+  } else {
+    const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(o);
+    if (!a || a.ndim() != 2)
+      throw py::type_error(label + ": expected a scipy.sparse matrix or a 2-D numpy array, found " + TypeName(o));
+    rows = a.shape(0), cols = a.shape(1);
+    if (rows == n && cols == n) {
+      auto ar = a.unchecked<2>();
+      for (py::ssize_t i = 0; i < rows; ++i)
+        for (py::ssize_t j = 0; j < cols; ++j) add(i, j, ar(i, j));
+    }
   }
-  d["rank"] = c.rank;
-  d["kind"] = c.kind;
-  d["target"] = c.target;
-  d["parameters"] = parameters;
-  d["uncertainty"] = uncertainty;
-  d["mean_abs_frequency_error_pct"] = Num(c.mean_abs_frequency_error_pct);
-  d["mean_mac"] = Num(c.mean_mac);
-  d["score"] = Num(c.score);
-  d["cost"] = Num(c.cost);
-  d["explained_pct"] = Num(c.explained_pct);
-  d["paired_modes"] = c.paired_modes;
-  d["plausible"] = c.plausible;
-  d["description"] = dg::DescribeCandidate(c);
-  return d;
+  if (rows != n || cols != n)
+    throw ema::InputError(label, "is " + std::to_string(rows) + "x" + std::to_string(cols) + " but model['dofs'] lists " +
+                                     std::to_string(n) + " DOFs: expected a " + std::to_string(n) + "x" + std::to_string(n) +
+                                     " matrix in the order of model['dofs']");
+  SparseMatrix m(n, n);
+  m.setFromTriplets(entries.begin(), entries.end());  // duplicates (COO) add up
+  m.makeCompressed();
+  return m;
+}
+
+/// Mass and stiffness matrices are symmetric: the full matrix, not one triangle.
+void RequireSymmetric(const SparseMatrix& a, const std::string& label) {
+  double scale = 0.0;
+  for (int c = 0; c < a.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(a, c); it; ++it) scale = std::max(scale, std::abs(it.value()));
+  const SparseMatrix difference = a - SparseMatrix(a.transpose());
+  for (int c = 0; c < difference.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(difference, c); it; ++it) {
+      if (!(std::abs(it.value()) > 1e-9 * scale)) continue;
+      auto i = it.row(), j = it.col();
+      if (std::abs(a.coeff(i, j)) < std::abs(a.coeff(j, i))) std::swap(i, j);  // name the entry given
+      char text[200];
+      std::snprintf(text, sizeof text, "entry [%ld, %ld] = %.6g but [%ld, %ld] = %.6g", static_cast<long>(i),
+                    static_cast<long>(j), a.coeff(i, j), static_cast<long>(j), static_cast<long>(i), a.coeff(j, i));
+      throw ema::InputError(label, std::string(text) + ": expected a symmetric matrix (the full matrix, not one triangle: "
+                                                       "A + A.T - diag(A) makes it from a triangle)");
+    }
+}
+
+/// A part's matrix is a sum of element matrices, each positive semi-definite: an LDLᵀ of its
+/// non-zero rows, shifted by 1e-9 of its largest diagonal entry, has no negative pivot (as the
+/// model file's reader checks [[fe.part]] matrices).
+void RequirePositiveSemiDefinite(const SparseMatrix& a, const ema::model::FeMatrices& fe, const std::string& label,
+                                 const char* what) {
+  std::vector<int> used(static_cast<size_t>(a.rows()), -1), rows;
+  for (int c = 0; c < a.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(a, c); it; ++it)
+      if (it.value() != 0.0 && used[static_cast<size_t>(it.row())] < 0) {
+        used[static_cast<size_t>(it.row())] = static_cast<int>(rows.size());
+        rows.push_back(static_cast<int>(it.row()));
+      }
+  if (rows.empty()) return;
+  std::vector<Eigen::Triplet<double>> entries;
+  double largest = 0.0;
+  for (int c = 0; c < a.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(a, c); it; ++it) {
+      const int r = used[static_cast<size_t>(it.row())], k = used[static_cast<size_t>(it.col())];
+      if (r < 0 || k < 0) continue;
+      entries.emplace_back(r, k, it.value());
+      if (r == k) largest = std::max(largest, std::abs(it.value()));
+    }
+  const auto n = static_cast<Eigen::Index>(rows.size());
+  for (Eigen::Index i = 0; i < n; ++i) entries.emplace_back(i, i, 1e-9 * largest);
+  SparseMatrix sub(n, n);
+  sub.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SimplicialLDLT<SparseMatrix> ldlt(sub);
+  Eigen::Index bad = -1;
+  if (ldlt.info() == Eigen::Success) {
+    const Eigen::VectorXd d = ldlt.vectorD();
+    for (Eigen::Index i = 0; i < d.size() && bad < 0; ++i)
+      if (!(d(i) > 0.0)) bad = ldlt.permutationPinv().indices()(i);
+  } else {
+    bad = 0;
+  }
+  if (bad < 0) return;
+  static const char* kDofNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+  const int row = rows[static_cast<size_t>(bad)];
+  const auto& dof = fe.dofs[static_cast<size_t>(row)];
+  throw ema::InputError(label, std::string("the part's ") + what + " is not positive semi-definite (a negative pivot at node " +
+                                   std::to_string(dof.node) + " " + kDofNames[std::clamp(dof.dof, 1, 6) - 1] + ", row " +
+                                   std::to_string(row) + "): expected the sum of the part's element matrices, which adds " +
+                                   "no negative stiffness or mass");
+}
+
+int DofCode(const py::handle& h, const std::string& label) {
+  static const char* kNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+  if (py::isinstance<py::str>(h)) {
+    const std::string s = h.cast<std::string>();
+    for (int i = 0; i < 6; ++i)
+      if (s == kNames[i]) return i + 1;
+    throw ema::InputError(label, "dof '" + s + "': expected 1..6 or 'ux', 'uy', 'uz', 'rx', 'ry', 'rz'");
+  }
+  const int code = Cast<int>(h, label, "a dof 1..6 or 'ux'..'rz'");
+  if (code < 1 || code > 6) throw ema::InputError(label, "dof " + std::to_string(code) + ": expected 1..6 (ux uy uz rx ry rz)");
+  return code;
+}
+
+double Uncertainty(const py::handle& h, const std::string& label) {
+  const double v = Cast<double>(h, label, "a number");
+  if (!(v > 0.0) || !std::isfinite(v))
+    throw ema::InputError(label, "uncertainty must be a relative 1σ > 0 (0.02 = 2 %), found " + std::to_string(v));
+  return v;
+}
+
+/// A part or part-group name: non-empty, without '/' or '+' (they join targets).
+std::string PartName(const py::handle& h, const std::string& label) {
+  const std::string name = Cast<std::string>(h, label, "a name (str)");
+  if (name.empty() || name.find('/') != std::string::npos || name.find('+') != std::string::npos)
+    throw ema::InputError(label, "'" + name + "': expected a non-empty name without '/' or '+'");
+  return name;
+}
+
+/// An FE model given in Python (a dict, or any object with these attributes):
+///   dofs      [(node, dof), ...] one per matrix row, dof 1..6 or 'ux'..'rz' (required)
+///   mass, stiffness   n × n, scipy.sparse or numpy (optional once parts carry them)
+///   parts     [{"name", "group", "stiffness", "mass", "uncertainty"}, ...]
+///   nodes     {node: (x, y, z)} or [(node, x, y, z), ...]
+///   points    [{"id", "node"}, ...] or [node, ...] (the test point ids are then the node ids)
+///   damping   a ratio, a list of ratios per mode, or {"ratio"} / {"ratios"}
+///   priors    {effect kind: relative 1σ}
+///   name      the model's name
+ema::model::Model BuildModel(const py::handle& o) {
+  namespace md = ema::model;
+  const Fields f(o, "model", {"name", "mass", "stiffness", "dofs", "nodes", "parts", "points", "damping", "priors"});
+  md::Model m;
+  m.origin = "model";
+  if (const py::object name = f.Get("name"); !name.is_none()) m.name = Cast<std::string>(name, f.At("name"), "a str");
+
+  const py::object dofs = f.Get("dofs");
+  if (dofs.is_none()) throw ema::InputError("model", "missing 'dofs': [(node, dof), ...], one per matrix row");
+  int row = 0;
+  for (const auto& d : Cast<py::sequence>(dofs, f.At("dofs"), "a list of (node, dof)")) {
+    const std::string at = f.At("dofs") + "[" + std::to_string(row++) + "]";
+    const auto pair = Cast<py::sequence>(d, at, "(node, dof)");
+    if (pair.size() != 2) throw ema::InputError(at, "expected (node, dof)");
+    const int node = Cast<int>(pair[0], at, "an integer node id");
+    if (node <= 0) throw ema::InputError(at, "node " + std::to_string(node) + ": expected a positive node id");
+    m.fe.dofs.push_back({node, DofCode(pair[1], at)});
+  }
+  const auto n = static_cast<Eigen::Index>(m.fe.dofs.size());
+  if (n == 0) throw ema::InputError(f.At("dofs"), "is empty: expected one (node, dof) per matrix row");
+  m.fe.origin = f.At("dofs");
+
+  const py::object mass = f.Get("mass"), stiffness = f.Get("stiffness"), parts = f.Get("parts");
+  if (!mass.is_none()) {
+    m.fe.mass = ToSparse(mass, n, f.At("mass"));
+    RequireSymmetric(m.fe.mass, f.At("mass"));
+    m.fe.mass_file = f.At("mass");
+  }
+  if (!stiffness.is_none()) {
+    m.fe.stiffness = ToSparse(stiffness, n, f.At("stiffness"));
+    RequireSymmetric(m.fe.stiffness, f.At("stiffness"));
+    m.fe.stiffness_file = f.At("stiffness");
+  }
+  const bool has_parts = !parts.is_none() && py::len(parts) > 0;
+  if (!has_parts && (mass.is_none() || stiffness.is_none()))
+    throw ema::InputError("model", "expected 'mass' and 'stiffness', or 'parts' that carry them");
+
+  if (has_parts) {
+    std::set<std::string> names;
+    std::map<std::string, bool> targets;  // group or lone part name -> is a group
+    int index = 0;
+    for (const auto& p : Cast<py::sequence>(parts, f.At("parts"), "a list of parts")) {
+      const Fields pf(p, f.At("parts") + "[" + std::to_string(index++) + "]",
+                      {"name", "group", "stiffness", "mass", "uncertainty"});
+      md::FePart part;
+      const py::object name = pf.Get("name");
+      if (name.is_none()) throw ema::InputError(pf.label(), "missing 'name'");
+      part.name = PartName(name, pf.At("name"));
+      const std::string ctx = pf.label() + " (part '" + part.name + "')";
+      if (!names.insert(part.name).second) throw ema::InputError(ctx, "duplicate part name '" + part.name + "'");
+      if (const py::object g = pf.Get("group"); !g.is_none()) part.group = PartName(g, pf.At("group"));
+      const std::string target = part.group.empty() ? part.name : part.group;
+      if (const auto it = targets.find(target); it != targets.end() && (part.group.empty() || !it->second))
+        throw ema::InputError(ctx, "name '" + target + "' is already used by another part or part group");
+      targets[target] = !part.group.empty();
+      for (const char* key : {"stiffness", "mass"}) {
+        const py::object a = pf.Get(key);
+        if (a.is_none()) continue;
+        auto matrix = std::make_shared<const SparseMatrix>(ToSparse(a, n, pf.At(key)));
+        RequireSymmetric(*matrix, pf.At(key));
+        RequirePositiveSemiDefinite(*matrix, m.fe, pf.At(key), key);
+        if (std::string(key) == "stiffness") part.stiffness = matrix, part.stiffness_file = pf.At(key);
+        else part.mass = matrix, part.mass_file = pf.At(key);
+      }
+      if (!part.stiffness && !part.mass)
+        throw ema::InputError(ctx, "expected 'stiffness' (and optionally 'mass'): the part's own matrices");
+      if (const py::object u = pf.Get("uncertainty"); !u.is_none()) part.uncertainty = Uncertainty(u, pf.At("uncertainty"));
+      m.fe.parts.push_back(std::move(part));
+    }
+  }
+
+  if (const py::object nodes = f.Get("nodes"); !nodes.is_none()) {
+    auto position = [&](const py::handle& xyz, const std::string& at) {
+      const auto v = Cast<std::vector<double>>(xyz, at, "(x, y, z)");
+      if (v.size() != 3) throw ema::InputError(at, "expected (x, y, z)");
+      return Eigen::Vector3d(v[0], v[1], v[2]);
+    };
+    if (IsMapping(nodes)) {
+      for (const auto& item : nodes.attr("items")()) {
+        const auto kv = item.cast<py::tuple>();
+        const int id = Cast<int>(kv[0], f.At("nodes"), "integer node ids as keys");
+        m.fe.node_positions[id] = position(kv[1], f.At("nodes") + "[" + std::to_string(id) + "]");
+      }
+    } else {
+      int k = 0;
+      for (const auto& e : Cast<py::sequence>(nodes, f.At("nodes"), "{node: (x, y, z)} or [(node, x, y, z), ...]")) {
+        const std::string at = f.At("nodes") + "[" + std::to_string(k++) + "]";
+        const auto v = Cast<std::vector<double>>(e, at, "(node, x, y, z)");
+        if (v.size() != 4) throw ema::InputError(at, "expected (node, x, y, z)");
+        m.fe.node_positions[static_cast<int>(v[0])] = {v[1], v[2], v[3]};
+      }
+    }
+  }
+
+  if (const py::object points = f.Get("points"); !points.is_none()) {
+    std::set<int> ids;
+    int k = 0;
+    for (const auto& e : Cast<py::sequence>(points, f.At("points"), "[{'id', 'node'}, ...] or [node, ...]")) {
+      const std::string at = f.At("points") + "[" + std::to_string(k++) + "]";
+      md::TestPoint p;
+      if (py::isinstance<py::int_>(e) || py::hasattr(e, "__index__")) {  // a node id (numpy integers too)
+        p.id = p.where.node = e.cast<int>();
+      } else {
+        const Fields pf(e, at, {"id", "node"});
+        if (pf.Get("node").is_none()) throw ema::InputError(at, "missing 'node': the FE node the test point sits on");
+        p.where.node = Cast<int>(pf.Get("node"), pf.At("node"), "an integer node id");
+        p.id = pf.Get("id").is_none() ? p.where.node : Cast<int>(pf.Get("id"), pf.At("id"), "an integer point id");
+      }
+      if (p.id <= 0 || p.where.node <= 0) throw ema::InputError(at, "expected a positive point id and node id");
+      if (!ids.insert(p.id).second) throw ema::InputError(at, "point id " + std::to_string(p.id) + " appears twice");
+      m.points.push_back(p);
+    }
+  }
+
+  if (const py::object damping = f.Get("damping"); !damping.is_none()) {
+    const std::string at = f.At("damping");
+    if (IsMapping(damping)) {
+      const Fields df(damping, at, {"ratio", "ratios"});
+      if (!df.Get("ratio").is_none()) m.damping.ratio = Cast<double>(df.Get("ratio"), df.At("ratio"), "a number");
+      if (!df.Get("ratios").is_none())
+        m.damping.ratios = Cast<std::vector<double>>(df.Get("ratios"), df.At("ratios"), "a list of numbers");
+    } else if (py::isinstance<py::sequence>(damping)) {
+      m.damping.ratios = Cast<std::vector<double>>(damping, at, "a list of numbers");
+    } else {
+      m.damping.ratio = Cast<double>(damping, at, "a damping ratio, a list of them or {'ratio'}/{'ratios'}");
+    }
+    for (double r : m.damping.ratios)
+      if (!(r >= 0.0 && r < 1.0)) throw ema::InputError(at, "ratios must lie in [0, 1) (0.01 = 1 %)");
+    if (!(m.damping.ratio >= 0.0 && m.damping.ratio < 1.0)) throw ema::InputError(at, "ratio must lie in [0, 1) (0.01 = 1 %)");
+  }
+
+  if (const py::object priors = f.Get("priors"); !priors.is_none()) {
+    const auto& kinds = md::EffectKinds();
+    std::vector<std::string> keys(kinds.begin(), kinds.end());
+    const Fields pf(priors, f.At("priors"), keys);
+    for (const auto& kind : keys)
+      if (const py::object v = pf.Get(kind); !v.is_none()) m.priors[kind] = Uncertainty(v, pf.At(kind));
+  }
+  return m;
+}
+
+/// A model file path, or an FE model given in Python (BuildModel).
+ema::model::Model ToModel(const py::object& o) {
+  if (IsPath(o)) return ema::formats::ReadModelFile(PathOf(o));
+  return BuildModel(o);
+}
+
+/// One setup's test modes for the diagnosis, as `ema diagnose --test SETUP=PATH` reads them: a path
+/// (UFF 55 with the σ and roving sets of the `ema fit --json` file beside it, or MODES.json), a
+/// dict in `ema fit --json`'s layout, or a modes dict of arrays (ema.fit's; "roving_sets" and
+/// "reference" when known).
+ema::diagnose::SetupModes ToSetupModes(const std::string& setup, const py::object& o, double sensor_mass) {
+  const std::string label = "tests['" + setup + "']";
+  ema::diagnose::SetupModes test;
+  test.setup = setup;
+  test.sensor_mass = sensor_mass;
+  if (IsPath(o)) {
+    const std::string path = PathOf(o);
+    test.modes = ema::formats::ReadModeSet(path);
+    if (test.modes.source.empty()) test.modes.source = path;
+    ema::app::AttachSidecarUncertainty(path, &test.modes);
+    if (sensor_mass > 0.0) ema::app::ReadSidecarTestSets(path, test.modes, &test.roving_sets, &test.reference);
+  } else if (IsJsonLayout(o)) {
+    test.modes = ModeSetFromJsonLayout(o, label, &test.roving_sets, &test.reference);
+  } else if (IsMapping(o)) {
+    const py::dict d(o);
+    test.modes = ModeSetFromArrays(d, label);
+    if (d.contains("roving_sets") && !d["roving_sets"].is_none())
+      test.roving_sets = Cast<std::vector<std::vector<int>>>(d["roving_sets"], label + "['roving_sets']", "[[node, ...], ...]");
+    if (d.contains("reference") && !d["reference"].is_none()) test.reference = ToDof(d["reference"]);
+  } else {
+    throw py::type_error(label + ": expected a path or a modes dict, found " + TypeName(o));
+  }
+  return test;
 }
 
 }  // namespace
 
-PYBIND11_MODULE(ema, m) {
+PYBIND11_MODULE(_ema, m) {
   m.doc() =
       "ema: experimental modal analysis (impact-hammer tests -> FRFs -> PolyMAX modes -> correlation with a\n"
-      "model -> data quality). The same C++ library as the `ema` command line, on numpy arrays.\n\n"
+      "model -> which physics the model misses -> data quality). The same C++ library as the `ema` command\n"
+      "line, on numpy arrays.\n\n"
       "FRF sets are dicts: frequency_hz (n_lines,), outputs/references [(node, '+Z'), ...],\n"
       "h (n_references, n_lines, n_outputs) complex, coherence (same shape) or None, averages\n"
       "(n_references, n_outputs) or None, quantity ('acceleration', 'velocity', 'displacement').\n"
-      "Mode sets are dicts: frequency_hz, damping_ratio, pole, mpc, mpd_deg, mcf (n_modes,), dofs\n"
-      "[(node, '+Z'), ...], shapes (n_dofs, n_modes) complex, geometry [(id, x, y, z), ...].\n"
-      "Functions that take FRFs or modes accept a file path or such a dict.";
+      "Mode sets are dicts: frequency_hz, damping_ratio, frequency_std_hz, damping_ratio_std, pole, mpc,\n"
+      "mpd_deg, mcf (n_modes,), dofs [(node, '+Z'), ...], shapes (n_dofs, n_modes) complex, geometry\n"
+      "[(id, x, y, z), ...]. Functions that take FRFs or modes accept a file path or such a dict; those\n"
+      "that take test modes also accept a dict in `ema fit --json`'s layout (MODES.json:\n"
+      "{'modes': [{'frequency_hz', 'frequency_std_hz', 'damping_ratio', 'shape': [{'node', 'dir', 'value'}]}]}).\n"
+      "Models are a model file (docs/model.md) or an FE model built from parts in Python: a dict with dofs,\n"
+      "mass, stiffness, parts (scipy.sparse or numpy matrices), nodes, points, damping (see model_modes).\n"
+      "Bad input raises ema.InputError (a ValueError) naming the file or the argument.";
+  m.attr("__version__") = EMA_VERSION;
 
   py::register_exception<ema::InputError>(m, "InputError", PyExc_ValueError);
   py::register_exception<ema::UsageError>(m, "UsageError", PyExc_ValueError);
 
-  m.def("read_frfs", [](const py::object& path) { return FrfDict(ToFrfSet(py::str(path))); }, py::arg("path"),
+  m.def("read_frfs", [](const py::object& path) { return FrfDict(ema::formats::ReadFrfSet(PathOf(path))); }, py::arg("path"),
         "Reads FRFs (UFF 58 function type 4 with coherence type 6, or an FRF table/folder) as an FRF dict.");
 
-  m.def("read_modes", [](const py::object& path) { return ModesDict(ToModeSet(py::str(path))); }, py::arg("path"),
-        "Reads mode shapes (UFF 55, or FE modes as UFF 2414) with their geometry (15/2411) as a modes dict.");
+  m.def("read_modes", [](const py::object& path) { return ModesDict(ema::formats::ReadModeSet(PathOf(path))); },
+        py::arg("path"),
+        "Reads mode shapes (UFF 55, FE modes as UFF 2414, or MODES.json in `ema fit --json`'s layout) with\n"
+        "their geometry (15/2411) as a modes dict.");
 
   m.def(
       "estimate_frfs",
@@ -353,6 +837,10 @@ PYBIND11_MODULE(ema, m) {
         for (const auto& s : fit.selected) orders.push_back(s.pole.order), cluster.push_back(s.cluster_size);
         d["order"] = orders;
         d["cluster_orders"] = cluster;
+        // The roving sets and the hammer DOF when the FRFs know them (diagnose's sensor_mass).
+        const nlohmann::json sets = ema::formats::TestSetsJson(set);
+        if (sets.contains("roving_sets")) d["roving_sets"] = FromJson(sets["roving_sets"]);
+        if (sets.contains("reference")) d["reference"] = DofTuple(set.references[0]);
         return d;
       },
       py::arg("frfs"), py::arg("band") = py::none(), py::arg("order_max") = 0,
@@ -361,7 +849,8 @@ PYBIND11_MODULE(ema, m) {
       "stabilisation, automatic selection (or the poles nearest the frequencies in `select`), LSFD shapes,\n"
       "and the maximum-likelihood refinement (refine='ml', the default; 'none' keeps PolyMAX/LSFD) with the\n"
       "1-sigma frequency_std_hz and damping_ratio_std. band=(lo, hi) in Hz. Returns a modes dict plus\n"
-      "synthesis_error, order and cluster_orders.");
+      "synthesis_error, order and cluster_orders (and roving_sets/reference when the FRFs know them).\n"
+      "The result goes straight into correlate() and diagnose() (the sigmas weigh each mode there).");
 
   m.def(
       "mode_indicators",
@@ -382,19 +871,34 @@ PYBIND11_MODULE(ema, m) {
 
   m.def(
       "model_modes",
-      [](const std::string& path, const std::string& setup, int max_modes) {
-        const ema::model::Model model = ema::formats::ReadModelFile(path);
+      [](const py::object& model_arg, const std::string& setup, int max_modes) {
+        const ema::model::Model model = ToModel(model_arg);
         ema::model::SolveOptions opt;
         opt.setup = setup;
         opt.max_modes = max_modes;
+        if (std::string why; !opt.IsValid(&why)) throw ema::UsageError(why);
         py::gil_scoped_release release;
         ModeSet modes = ema::model::Solve(model, opt).modes;
         py::gil_scoped_acquire acquire;
         return ModesDict(modes);
       },
       py::arg("model"), py::arg("setup") = "", py::arg("max_modes") = 0,
-      "The model's own modes as `ema model` (a model file, docs/model.md), at the operating point of `setup`\n"
-      "(empty: nominal), as a modes dict with the shapes at the model's test points.");
+      "The model's own modes as `ema model`, at the operating point of `setup` ('' = nominal), as a modes dict\n"
+      "with the shapes at the model's test points (+X, +Y, +Z each; unit modal mass). max_modes: elastic modes\n"
+      "kept (0 = all for small models, 30 from 1000 DOFs on).\n\n"
+      "model: a model file (TOML, docs/model.md), or an FE model built from parts in Python (model-format.md,\n"
+      "'FE models built from parts'): a dict, or any object with these attributes:\n"
+      "  dofs       [(node, dof), ...] one per matrix row; dof 1..6 or 'ux', 'uy', 'uz', 'rx', 'ry', 'rz'\n"
+      "  mass       n x n scipy.sparse matrix or numpy array (optional when parts carry the mass)\n"
+      "  stiffness  n x n, whatever is in no part (optional)\n"
+      "  parts      [{'name', 'group' (optional), 'stiffness', 'mass' (optional), 'uncertainty' (optional,\n"
+      "             relative 1-sigma)}, ...]: each part's own contribution, K = stiffness + sum of parts'\n"
+      "  nodes      {node: (x, y, z)} (m)\n"
+      "  points     [{'id': 101, 'node': 1003}, ...] or [node, ...]: where the test's sensors sit\n"
+      "  damping    a modal damping ratio, or a list of them per mode\n"
+      "  priors     {effect kind: relative 1-sigma}, name  (optional)\n"
+      "Matrices are symmetric (full storage); parts' positive semi-definite. A model built in Python has no\n"
+      "setups: use setup=''.");
 
   m.def(
       "mac",
@@ -405,7 +909,7 @@ PYBIND11_MODULE(ema, m) {
   m.def(
       "correlate",
       [](const py::object& test, const py::object& model, double mac_min) {
-        const ModeSet t = ToModeSet(test), mm = ToModeSet(model);
+        const ModeSet t = ToModeSet(test, "test"), mm = ToModeSet(model, "model");
         ema::correlation::CorrelationOptions opt;
         opt.pairing.mac_min = mac_min;
         const auto r = ema::correlation::Correlate(t, mm, opt);
@@ -436,44 +940,76 @@ PYBIND11_MODULE(ema, m) {
         return d;
       },
       py::arg("test"), py::arg("model"), py::arg("mac_min") = ema::correlation::CorrelationOptions{}.pairing.mac_min,
-      "Test modes against model modes as `ema correlate` (paths or modes dicts): MAC matrix on the shared DOFs,\n"
-      "pairing, agreement % = 100 (1 - |f_model - f_test| / f_model); unpaired modes are 0-based indices.");
+      "Test modes against model modes as `ema correlate` (paths, modes dicts or dicts in `ema fit --json`'s\n"
+      "layout): MAC matrix on the shared DOFs, pairing, agreement % = 100 (1 - |f_model - f_test| / f_model);\n"
+      "unpaired modes are 0-based indices.");
 
+  const ema::diagnose::DiagnoseOptions defaults;
   m.def(
       "diagnose",
-      [](const std::string& model_path, const py::dict& tests, const std::string& criterion) {
-        const ema::model::Model model = ema::formats::ReadModelFile(model_path);
+      [](const py::object& model_arg, const py::object& tests, const std::string& criterion, int max_effects, bool members,
+         double frequency_floor, double shape_sigma, double mac_min, double sensor_mass) {
+        namespace dg = ema::diagnose;
+        const ema::model::Model model = ToModel(model_arg);
+        if (!(sensor_mass >= 0.0) || !std::isfinite(sensor_mass))
+          throw ema::UsageError("sensor_mass must be a mass in kg >= 0 (0.0112 for an 11.2 g accelerometer)");
         std::vector<dg::SetupModes> sets;
-        for (auto item : tests) sets.push_back({item.first.cast<std::string>(), ToModeSet(py::reinterpret_borrow<py::object>(item.second))});
+        // One mode set alone (a path, MODES.json's layout, ema.fit's dict): the nominal setup's.
+        const bool single = IsPath(tests) || IsJsonLayout(tests) ||
+                            (IsMapping(tests) && py::dict(tests).contains("frequency_hz") && py::dict(tests).contains("shapes"));
+        if (single) {
+          sets.push_back(ToSetupModes("", tests, sensor_mass));
+        } else if (IsMapping(tests)) {
+          for (const auto& item : tests.attr("items")()) {
+            const auto kv = item.cast<py::tuple>();
+            sets.push_back(ToSetupModes(Cast<std::string>(kv[0], "tests", "setup names (str) as keys"),
+                                        py::reinterpret_borrow<py::object>(kv[1]), sensor_mass));
+          }
+        } else {
+          throw py::type_error("tests: expected {setup: modes, ...} ('' for the nominal model) or one mode set, found " +
+                               TypeName(tests));
+        }
+        if (sets.empty()) throw ema::UsageError("tests: expected the test modes of at least one setup");
         dg::DiagnoseOptions opt;
-#if EMA_PY_DIAGNOSE_MODULE
         if (!criterion.empty() && !dg::StringToCriterion(criterion, &opt.criterion))
-          throw py::value_error("criterion: '" + criterion + "' is not one ema diagnose --criterion takes");
-#else
-        if (criterion == "bic") opt.criterion = dg::InformationCriterion::kBic;
-        else if (criterion == "aicc") opt.criterion = dg::InformationCriterion::kAicc;
-        else if (!criterion.empty()) throw py::value_error("criterion: expected 'bic' or 'aicc'");
-#endif
+          throw ema::UsageError("criterion: '" + criterion + "' is not one ema diagnose --criterion takes "
+                                "(evidence, bic, aicc)");
+        opt.max_effects = max_effects;
+        opt.members = members;
+        opt.frequency_floor = frequency_floor;
+        opt.shape_sigma = shape_sigma;
+        opt.pairing.mac_min = mac_min;
+        if (std::string why; !opt.IsValid(&why)) throw ema::UsageError(why);
         dg::Diagnosis d;
         {
           py::gil_scoped_release release;
           d = dg::Diagnose(model, sets, opt);
         }
-        py::list candidates;
-        for (const auto& c : d.candidates) candidates.append(CandidateDict(c));
-        py::dict out;
-        out["baseline"] = CandidateDict(d.baseline);
-        out["candidates"] = candidates;
-        out["explanation"] = d.explanation;
-        out["residual_count"] = d.residual_count;
-        out["test_modes"] = d.test_mode_count;
-        return out;
+        nlohmann::json out = ema::formats::DiagnosisJson(d, opt);
+        if (!d.candidates.empty()) out["modes"] = ema::formats::DiagnosisModeRows(d.baseline, d.candidates.front());
+        return FromJson(out);
       },
-      py::arg("model"), py::arg("tests"), py::arg("criterion") = "",
-      "Which physical effect is the model missing? As `ema diagnose`: `tests` maps a setup name ('' for the\n"
-      "nominal model) to its test modes (path or modes dict). Every candidate effect is fitted and ranked by\n"
-      "the criterion (criterion='' = the CLI's default); returns {'candidates': [{rank, kind, target, parameters, uncertainty,\n"
-      "mean_abs_frequency_error_pct, mean_mac, score, description}, ...] (rank 1 first), 'baseline', ...}.");
+      py::arg("model"), py::arg("tests"), py::arg("criterion") = "", py::kw_only(),
+      py::arg("max_effects") = defaults.max_effects, py::arg("members") = defaults.members,
+      py::arg("frequency_floor") = defaults.frequency_floor, py::arg("shape_sigma") = defaults.shape_sigma,
+      py::arg("mac_min") = defaults.pairing.mac_min, py::arg("sensor_mass") = 0.0,
+      "Which physical effect is the model missing, where, and how sure? As `ema diagnose`.\n\n"
+      "model: a model file, or an FE model built from parts in Python (a dict with dofs, mass, stiffness, parts\n"
+      "  as scipy.sparse or numpy matrices, nodes, points, damping: see help(ema.model_modes)).\n"
+      "tests: {setup: modes} ('' = the model's nominal operating points), modes being\n"
+      "  - a path: UFF 55 (with the sigmas of the `ema fit --json` file beside it, as the CLI reads it) or MODES.json;\n"
+      "  - what ema.fit returns (its frequency_std_hz weighs each mode);\n"
+      "  - a dict in `ema fit --json`'s layout: {'modes': [{'frequency_hz': 41.2, 'frequency_std_hz': 0.03,\n"
+      "    'damping_ratio': 0.01, 'shape': [{'node': 101, 'dir': '+Z', 'value': [re, im] or re}, ...]}, ...]},\n"
+      "    the shapes at the measured DOFs only (every mode the same DOFs).\n"
+      "  One mode set alone (a path or a dict) means {'': modes}.\n"
+      "criterion: 'evidence' (default: '' = the CLI's), 'bic' or 'aicc'. Keyword options as the CLI's:\n"
+      "max_effects (1..3), members (False = --no-members), frequency_floor, shape_sigma, mac_min, sensor_mass (kg\n"
+      "per measured node, the test's own sensors).\n\n"
+      "Returns `ema diagnose --json`'s layout (DIAG.json, cli.md) as a dict: 'candidates' ranked (rank 1 first;\n"
+      "each with kind, target, parameters, uncertainty, probability, mean_abs_frequency_error_pct, mean_mac,\n"
+      "score, description, effects, the evidence per test mode), 'baseline', 'effect_probabilities', 'groups',\n"
+      "'steps', 'explanation', 'modes' (every test mode before/after rank 1) and the options used.");
 
   m.def(
       "quality",

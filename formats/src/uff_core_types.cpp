@@ -542,9 +542,10 @@ ModeSet ModeSetFromDatasets(const std::filesystem::path& path, const std::vector
   std::map<int, uff::CoordinateSystem18> systems;
   std::vector<int> node_order;
   double length_factor = 1.0;
+  bool units_stated = false;
   for (const Dataset& d : datasets) {
     const std::string where = path.string() + ":" + std::to_string(d.line);
-    if (const auto* u = std::get_if<uff::Units164>(&d.body)) length_factor = u->length;
+    if (const auto* u = std::get_if<uff::Units164>(&d.body)) length_factor = u->length, units_stated = true;
     if (const auto* n15 = std::get_if<uff::Nodes15>(&d.body)) {
       for (const auto& n : n15->nodes) {
         if (!nodes.count(static_cast<int>(n.label))) node_order.push_back(static_cast<int>(n.label));
@@ -675,6 +676,8 @@ ModeSet ModeSetFromDatasets(const std::filesystem::path& path, const std::vector
     }
     set.geometry.push_back(Node{id, Eigen::Vector3d(p[0], p[1], p[2])});
   }
+  if (!set.geometry.empty() && !units_stated)
+    set.geometry_units_note = path.string() + ": no units dataset (164): node coordinates taken as metres";
   return set;
 }
 
@@ -694,6 +697,7 @@ std::vector<Dataset> ModeSetDatasets(const ModeSet& modes) {
   h.uff_program = "ema";
   out.push_back(Dataset{151, 0, 0, {}, h});
   if (!modes.geometry.empty()) {
+    out.push_back(Dataset{164, 0, 0, {}, uff::Units164{}});  // SI: the positions are metres
     uff::Nodes15 n;
     for (const auto& g : modes.geometry) n.nodes.push_back({g.id, 0, 0, 0, {g.position.x(), g.position.y(), g.position.z()}});
     out.push_back(Dataset{15, 0, 0, {}, n});

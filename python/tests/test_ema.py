@@ -1,6 +1,10 @@
 """The ema Python module against the ema CLI on the same files: every number the CLI writes with
 full precision (JSON) must come back from Python bit for bit; FRFs written to UFF (13 significant
 digits) agree to that last digit."""
+import ast
+import pathlib
+import re
+
 import numpy as np
 import pytest
 
@@ -8,10 +12,25 @@ import ema
 from conftest import SHARED, SOURCE, load_json, run_ema
 
 
-def test_module_and_functions_have_docstrings():
-    assert "numpy" in ema.__doc__
-    for name in ["read_frfs", "read_modes", "estimate_frfs", "fit", "mode_indicators", "mac", "correlate", "quality"]:
-        assert getattr(ema, name).__doc__, name
+def test_module_and_functions_have_docstrings_and_stubs():
+    assert "numpy" in ema.__doc__ and "pip install" in ema.__doc__
+    functions = [name for name in ema.__all__ if callable(getattr(ema, name)) and not isinstance(getattr(ema, name), type)]
+    assert {"read_frfs", "read_modes", "estimate_frfs", "fit", "mode_indicators", "model_modes", "mac", "correlate",
+            "diagnose", "quality"} <= set(functions)
+    # Every function: a docstring beyond pybind11's signature line, and a stub with a docstring in _ema.pyi.
+    stubs = ast.parse((pathlib.Path(ema.__file__).parent / "_ema.pyi").read_text())
+    stubbed = {f.name: ast.get_docstring(f) for f in stubs.body if isinstance(f, ast.FunctionDef)}
+    for name in functions:
+        assert len(getattr(ema, name).__doc__.strip().splitlines()) > 1, name
+        assert stubbed.get(name), f"{name}: no stub with a docstring in _ema.pyi"
+    # The stubs' parameters are the module's (pybind11's signature line starts each docstring).
+    for f in (f for f in stubs.body if isinstance(f, ast.FunctionDef)):
+        line = getattr(ema, f.name).__doc__.splitlines()[0]
+        runtime = re.findall(r"(\w+): ", line[line.index("(") + 1:line.rindex(")")])
+        assert [a.arg for a in f.args.args + f.args.kwonlyargs] == runtime, f.name
+    assert set(stubbed) == set(functions)
+    assert (pathlib.Path(ema.__file__).parent / "py.typed").exists()
+    assert ema.__version__.count(".") == 2
 
 
 def test_fit_matches_cli_bit_for_bit(beam_fit):

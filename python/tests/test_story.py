@@ -28,6 +28,8 @@ def test_readme_story_runs_and_finds_the_mount_compliance():
     # ... and the missing physics sits in series with the bearings (the ball-joint mounts: a
     # compliance, a Hertz contact, as the diagnosis words it).
     assert "in series with group 'bearings'" in out, out
+    # The roving sensors' own mass is modelled (sensor_mass): nothing else is added to explain it.
+    assert "added mass" not in out, out
 
 
 def test_diagnose_matches_cli(tmp):
@@ -35,14 +37,23 @@ def test_diagnose_matches_cli(tmp):
     tests = {}
     for setup in ["stud-5um", "stud-9um"]:
         run_ema("frf", data / "data" / f"{setup}.unv", "-o", tmp / f"{setup}-frf.unv")
-        run_ema("fit", tmp / f"{setup}-frf.unv", "-o", tmp / f"{setup}.unv", "--band", "100:450")
+        # The `ema fit --json` file beside the modes carries each mode's σ: both read it.
+        run_ema("fit", tmp / f"{setup}-frf.unv", "-o", tmp / f"{setup}.unv", "--json", tmp / f"{setup}.json",
+                "--band", "100:450")
         tests[setup] = str(tmp / f"{setup}.unv")
     run_ema("diagnose", data / "model.toml", *[a for s, p in tests.items() for a in ("--test", f"{s}={p}")],
             "--json", tmp / "diag.json")
-    cli = load_json(tmp / "diag.json")["candidates"]
-    py = ema.diagnose(str(data / "model.toml"), tests)["candidates"]
-    assert len(py) == len(cli)
-    for p, c in zip(py, cli):
+    cli = load_json(tmp / "diag.json")
+    py = ema.diagnose(str(data / "model.toml"), tests)
+    assert len(py["candidates"]) == len(cli["candidates"])
+    for p, c in zip(py["candidates"], cli["candidates"]):
         for key in ["rank", "kind", "target", "parameters", "mean_abs_frequency_error_pct", "mean_mac", "score"]:
             assert p[key] == c[key], (key, p[key], c[key])
         assert p["description"] == c["description"]
+    # The whole of DIAG.json but the CLI's printed summary: the same codec, the same σ per mode.
+    assert set(cli) - set(py) == {"summary"}
+    for key in py:
+        assert py[key] == cli[key], key
+    sigmas = [m["frequency_std_hz"] for s in tests for m in load_json(tmp / f"{s}.json")["modes"]]
+    assert [r["sigma_hz"] for r in py["modes"]] == [max(s, 1e-3 * r["test_frequency_hz"])
+                                                   for s, r in zip(sigmas, py["modes"])]

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "ema/formats/info.hpp"
+#include "ema/formats/io.hpp"
 
 namespace ema::formats {
 namespace {
@@ -219,6 +220,39 @@ TEST(FormatsInfoQuirks, GeometryWithoutUnitsDatasetIsStated) {
   bool said = false;
   for (const auto& n : s.notes) said = said || n.find("no units dataset (164)") != std::string::npos;
   EXPECT_TRUE(said) << SummaryText(s);
+}
+
+// The same gap in a mode file: the reader says so (ModeSet::geometry_units_note), `ema correlate`
+// repeats it where it pairs nodes by distance, and ema's own mode files state SI.
+TEST(FormatsInfoQuirks, ModeFileGeometryWithoutUnitsIsNotedAndEmaWritesUnits) {
+  if (!HaveEma()) FAIL() << "ema not built";
+  std::string text = "    -1\n    15\n         1         0         0        11  0.0000000E+00  0.0000000E+00  0.0000000E+00\n"
+                     "         2         0         0        11  1.0000000E+03  0.0000000E+00  0.0000000E+00\n    -1\n";
+  for (int m = 1; m <= 2; ++m)
+    text += "    -1\n    55\nmode\nNONE\nNONE\nNONE\nNONE\n"
+            "         1         2         2         8         5         3\n"
+            "         2         4         " + std::to_string(m) + "         " + std::to_string(m) + "\n"
+            "  " + (m == 1 ? std::string("1.00000e+02") : std::string("2.00000e+02")) + "  0.00000e+00  0.00000e+00  1.00000e+00\n"
+            "         1\n  1.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00\n"
+            "         2\n  0.50000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00\n    -1\n";
+  const fs::path f = WriteFile("modes55_no164.unv", text);
+  const ModeSet read = ReadModeSet(f);
+  ASSERT_EQ(read.geometry.size(), 2u);
+  EXPECT_DOUBLE_EQ(read.geometry[1].position.x(), 1000.0) << "taken as metres, as the note says";
+  EXPECT_NE(read.geometry_units_note.find("no units dataset (164)"), std::string::npos);
+  // Written back by ema: dataset 164 (SI) precedes the nodes, and the note is gone.
+  const fs::path back = fs::path(EMA_TEST_TMP_DIR) / "modes55_with164.unv";
+  WriteModeSet(back, read);
+  const ModeSet again = ReadModeSet(back);
+  EXPECT_TRUE(again.geometry_units_note.empty()) << again.geometry_units_note;
+  EXPECT_DOUBLE_EQ(again.geometry[1].position.x(), 1000.0);
+  // Correlating by distance repeats the note; by node id it has nothing to say.
+  const CliRun by_distance = Ema("correlate --test '" + f.string() + "' --model '" + back.string() + "' --tolerance 0.01");
+  EXPECT_EQ(by_distance.code, 0) << by_distance.err;
+  EXPECT_NE(by_distance.err.find("no units dataset (164)"), std::string::npos) << by_distance.err;
+  const CliRun by_id = Ema("correlate --test '" + f.string() + "' --model '" + back.string() + "'");
+  EXPECT_EQ(by_id.code, 0) << by_id.err;
+  EXPECT_EQ(by_id.err.find("no units dataset"), std::string::npos) << by_id.err;
 }
 
 // `ema quality --modes MODES.unv` alone failed with "the option '--input' is required".

@@ -161,6 +161,9 @@ struct ModeSet {
   std::vector<Mode> modes;
   std::vector<Node> geometry;          ///< test/model geometry when known (may be empty)
   std::string source;                  ///< where the set came from, for messages and reports
+  /// Set by readers when the geometry's length unit was not stated (a UFF file without dataset
+  /// 164): the coordinates were taken as metres. Outputs that use positions repeat it.
+  std::string geometry_units_note;
 };
 
 /// Pole (rad/s) to undamped natural frequency (Hz) and damping ratio.
