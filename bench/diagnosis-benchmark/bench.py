@@ -105,6 +105,15 @@ def score(case, diag, corr_after, corr_before, times):
         if effect_set(c) == truth:
             truth_rank, p_truth = c["rank"], c.get("probability", 0.0)
             break
+    # The diagnosis itself says which candidates the data cannot tell apart from rank 1 (residuals
+    # nearly parallel, costs within 2): rank 1 "tied with the truth" when the truth is one of them.
+    tied = False
+    for label in first.get("tied_with", []):
+        parts = []
+        for part in label.split(" + "):
+            m = re.match(r"^(\w+)(?: \([^)]*\))? of '(.*)'$", part)
+            parts.append((m.group(1), m.group(2)) if m else (part, ""))
+        tied = tied or sorted(parts) == truth
     params = []
     for e in case["truth"]:
         for name, value in e["parameters"].items():
@@ -121,7 +130,7 @@ def score(case, diag, corr_after, corr_before, times):
         "member": any("/" in e["target"] or e["target"].startswith("points:") for e in case["truth"]),
         "rank1": {"kind": first["kind"], "target": first["target"], "probability": first.get("probability"),
                   "parameters": first.get("parameters", {})},
-        "right": right, "parameters": params, "parameters_ok": params_ok,
+        "right": right, "right_or_tied": right or tied, "parameters": params, "parameters_ok": params_ok,
         "truth_rank": truth_rank, "p_truth": p_truth, "p_rank1": first.get("probability", 0.0),
         "agreement_before_pct": before, "agreement_after_pct": agreement,
         "agreement_ok": agreement >= AGREEMENT_GOAL,
