@@ -135,9 +135,12 @@ std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& m
     if (std::find(setups.begin(), setups.end(), m.setup) == setups.end()) setups.push_back(m.setup);
   std::ostringstream out;
   auto adequacy = [&](const diagnose::Candidate& c) {
+    const bool tiny = c.noise_consistent && c.reduced_chi2 < 0.01;  // well inside σ (the floor may dominate it)
     out << "  " << (c.noise_consistent ? "Adequate to the test's noise: yes" : "Adequate to the test's noise: NO")
-        << " — reduced χ² " << Number(c.reduced_chi2, 3) << " over " << d.test_mode_count << " test modes"
-        << (c.noise_consistent ? " (what the measurement noise explains).\n"
+        << " — reduced χ² " << (tiny ? std::string("below 0.01") : Number(c.reduced_chi2, 3)) << " over "
+        << d.test_mode_count << " test modes"
+        << (tiny ? " (well inside the test's σ; each σ is at least --frequency-floor × f).\n"
+            : c.noise_consistent ? " (what the measurement noise explains).\n"
                                : " (1 would be noise alone): the model still misses something these data can see"
                                  + std::string(c.effects.empty() ? "" : "; rank 1 is not the whole answer") + ".\n");
   };

@@ -284,8 +284,13 @@ json DiagnosisView(const json& diagnosis) {
   if (first.contains("noise_consistent") && first["noise_consistent"].is_boolean()) {
     const bool ok = first["noise_consistent"].get<bool>();
     story["noise_consistent"] = ok;
-    story["adequacy"] = ok ? "Adequate to the test's noise: yes — reduced χ² " + Readable(chi2) + over +
-                                 ": what is left is what the measurement noise explains."
+    // Far below 1 the number itself says little: the misfit sits well inside the test's σ, which
+    // the frequency floor (0.1 % of f by default) may dominate.
+    story["adequacy"] = ok ? (chi2 < 0.01 ? "Adequate to the test's noise: yes — reduced χ² below 0.01" + over +
+                                                ": the updated model sits well inside the test's σ (each σ at least "
+                                                "the frequency floor, 0.1 % of f by default)."
+                                          : "Adequate to the test's noise: yes — reduced χ² " + Readable(chi2) + over +
+                                                ": what is left is what the measurement noise explains.")
                            : "Adequate to the test's noise: NO — reduced χ² " + Readable(chi2) + over +
                                  " (1 would be noise alone): the model still misses something these data can see" +
                                  (effects.empty() ? "" : "; rank 1 is not the whole answer") + ".";
