@@ -81,4 +81,5 @@ int RunRun(const std::vector<std::string>& args);
 int RunSimulate(const std::vector<std::string>& args);
 int RunQuality(const std::vector<std::string>& args);
 int RunAmplitude(const std::vector<std::string>& args);
+int RunPick(const std::vector<std::string>& args);
 }  // namespace ema

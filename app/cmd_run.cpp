@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -30,6 +31,8 @@
 #include "ema/formats/project_file.hpp"
 #include "quality_json.hpp"
 #include "report.hpp"
+#include "pick/pick_server.hpp"
+#include "pick/pick_session.hpp"
 #include "run_history.hpp"
 #include "stages.hpp"
 
@@ -185,6 +188,9 @@ struct TestResults {
   std::optional<FrfSet> frfs;
   nlohmann::json frf_summary;
   std::optional<app::FitStageResult> fit;
+  std::string select;          ///< the selection the fit used ("auto" or F1,F2,...)
+  bool picked_by_hand = false; ///< chosen in `ema pick` during the run (pick = true)
+  std::string fit_command;     ///< the equivalent `ema fit` command
   std::optional<app::ModelStageResult> model_before, model_after;
   std::optional<app::CorrelateStageResult> correlation_before, correlation_after;
 };
@@ -198,7 +204,9 @@ int RunRun(const std::vector<std::string>& args) {
   options.add_options()
       ("project", po::value<std::string>()->required(), "project file (TOML, docs/project-file.md)")
       ("output,o", po::value<std::string>()->default_value("ema-run"), "output folder (created; files in it are replaced)")
-      ("no-report", "skip the HTML report");
+      ("no-report", "skip the HTML report")
+      ("no-pick", "do not open ema pick for the tests that say pick = true (their select is used)")
+      ("no-browser", "with pick = true: print the picker's URL, do not open it");
   po::positional_options_description positional;
   positional.add("project", 1);
   po::variables_map vm;
@@ -244,7 +252,7 @@ int RunRun(const std::vector<std::string>& args) {
     } else {
       const std::string command = Joined(test.time) + " -o " + f.frf.string() + " --estimator " + project.estimator +
                                   " --json " + f.frf_json.string() + (project.binary ? " --binary" : "");
-      have_frf = runner.Run(tag + "frf", test.name + "-frf", command, [&](std::ostream& log) {
+      have_frf = runner.Run(tag + "frf", test.name + "-frf", "frf " + command, [&](std::ostream& log) {
         app::FrfConfig config;
         for (const fs::path& p : test.time) config.inputs.push_back(p.string());
         config.output = f.frf.string();
@@ -261,31 +269,65 @@ int RunRun(const std::vector<std::string>& args) {
       });
     }
     if (have_frf) {
-      std::string command = frf_path.string() + " -o " + f.modes.string() + " --json " + f.modes_json.string() +
-                            " --stabilisation " + f.stabilisation.string() + " --select " + project.select;
-      if (project.band_hz) command += " --band " + Fixed(project.band_hz->first, 3) + ":" + Fixed(project.band_hz->second, 3);
-      if (project.order_max) command += " --order-max " + std::to_string(*project.order_max);
-      if (!project.fit_extra.empty()) command += " " + Joined(project.fit_extra);
-      runner.Run(tag + "fit", test.name + "-fit", command, [&](std::ostream& log) {
-        // [fit] args are `ema fit` options; band, order_max and select are the project's own keys.
+      // [fit] args are `ema fit` options; band, order_max and select are the project's own keys.
+      auto fit_config = [&](const std::string& select) {
         std::optional<app::FitConfig> config = app::ParseFitArgs(project.fit_extra, false);
         if (!config) throw UsageError("[fit] args: --help is not an option of a project");
         config->input = frf_path.string();
         config->output = f.modes.string();
         config->json_path = f.modes_json.string();
         config->stabilisation_path = f.stabilisation.string();
-        config->options.select_frequencies_hz = app::ParseSelect(project.select);
+        config->options.select_frequencies_hz = app::ParseSelect(select);
         if (project.band_hz) std::tie(config->options.data.band_lo_hz, config->options.data.band_hi_hz) = *project.band_hz;
         if (project.order_max) config->options.polymax.order_max = *project.order_max;
+        return *config;
+      };
+      r.select = test.select.empty() ? project.select : test.select;
+      if (test.pick && !vm.count("no-pick")) {
+        // The picker for this test (docs/pick.md): the run waits for its Done and goes on with the
+        // selection on screen. A picker that cannot start leaves the project's selection.
+        runner.Progress(tag + "pick");
+        try {
+          if (!r.frfs) r.frfs = formats::ReadFrfSet(frf_path);
+          app::PickOptions pick_options;
+          pick_options.open_browser = !vm.count("no-browser");
+          app::PickSession session(fit_config(r.select), *r.frfs, pick_options);
+          if (cli::StderrIsTerminal()) std::fprintf(stderr, "\n");
+          std::cout << test.name << ": pick the poles in the browser (pick = true); Done goes on with the pick on screen\n"
+                    << session.Summary() << std::flush;
+          if (const int signal = app::ServePick(session, pick_options, std::cout); signal != 0) {
+            std::cerr << "ema run: stopped (" << (signal == SIGTERM ? "SIGTERM" : "Ctrl-C") << ") while picking the poles of "
+                      << test.name << "; the steps after it were not run\n";
+            return 128 + signal;
+          }
+          const std::string picked = session.SelectText();
+          if (picked.empty()) {
+            runner.Problem(tag + "pick: nothing was picked when Done was pressed; the run goes on with select = " + r.select);
+          } else {
+            r.picked_by_hand = picked != "auto";
+            r.select = picked;
+          }
+        } catch (const std::exception& e) {
+          runner.Problem(tag + "pick: " + e.what() + " (the run goes on with select = " + r.select + ")");
+        }
+      }
+      std::string command = frf_path.string() + " -o " + f.modes.string() + " --json " + f.modes_json.string() +
+                            " --stabilisation " + f.stabilisation.string() + " --select " + r.select;
+      if (project.band_hz) command += " --band " + Fixed(project.band_hz->first, 3) + ":" + Fixed(project.band_hz->second, 3);
+      if (project.order_max) command += " --order-max " + std::to_string(*project.order_max);
+      if (!project.fit_extra.empty()) command += " " + Joined(project.fit_extra);
+      r.fit_command = "ema fit " + command;
+      runner.Run(tag + "fit", test.name + "-fit", "fit " + command, [&](std::ostream& log) {
+        const app::FitConfig config = fit_config(r.select);
         if (!r.frfs) r.frfs = formats::ReadFrfSet(frf_path);  // FRFs the project gives
-        r.fit = app::RunFitStage(*config, *r.frfs, log);
+        r.fit = app::RunFitStage(config, *r.frfs, log);
       });
     } else {
       runner.Skip(tag + "fit", "no FRFs");
     }
     const std::string setup_args = test.setup.empty() ? "" : " --setup " + test.setup;
     runner.Run(tag + "model (nominal)", test.name + "-model-before",
-               model_path + " -o " + f.model_before.string() + " --json " + f.model_before_json.string() + setup_args,
+               "model " + model_path + " -o " + f.model_before.string() + " --json " + f.model_before_json.string() + setup_args,
                [&](std::ostream& log) {
                  app::ModelConfig config;
                  config.model_path = model_path;
@@ -296,7 +338,7 @@ int RunRun(const std::vector<std::string>& args) {
                });
     if (r.fit) {
       runner.Run(tag + "correlate (nominal)", test.name + "-correlate-before",
-                 f.modes.string() + " " + model_path + " --json " + f.corr_before.string() + " --table " +
+                 "correlate " + f.modes.string() + " " + model_path + " --json " + f.corr_before.string() + " --table " +
                      f.corr_before_table.string() + setup_args,
                  [&](std::ostream& log) {
                    if (!r.model_before) throw InputError(model_path, "the nominal model's modes are missing");
@@ -337,7 +379,7 @@ int RunRun(const std::vector<std::string>& args) {
       command += std::string(" --sensor-mass ") + text;
     }
     if (!project.diagnose_extra.empty()) command += " " + Joined(project.diagnose_extra);
-    runner.Run("diagnose", "diagnose", command, [&](std::ostream& log) {
+    runner.Run("diagnose", "diagnose", "diagnose " + command, [&](std::ostream& log) {
       // [diagnose] args are `ema diagnose` options.
       std::optional<app::DiagnoseConfig> config = app::ParseDiagnoseArgs(project.diagnose_extra, false);
       if (!config) throw UsageError("[diagnose] args: --help is not an option of a project");
@@ -383,7 +425,7 @@ int RunRun(const std::vector<std::string>& args) {
     }
     const std::string setup_args = test.setup.empty() ? "" : " --setup " + test.setup;
     runner.Run(tag + "model (updated)", test.name + "-model-after",
-               updated_model.string() + " -o " + f.model_after.string() + " --json " + f.model_after_json.string() +
+               "model " + updated_model.string() + " -o " + f.model_after.string() + " --json " + f.model_after_json.string() +
                    setup_args,
                [&](std::ostream& log) {
                  app::ModelConfig config;
@@ -398,7 +440,7 @@ int RunRun(const std::vector<std::string>& args) {
       continue;
     }
     runner.Run(tag + "correlate (updated)", test.name + "-correlate-after",
-               f.modes.string() + " " + updated_model.string() + " --json " + f.corr_after.string() + " --table " +
+               "correlate " + f.modes.string() + " " + updated_model.string() + " --json " + f.corr_after.string() + " --table " +
                    f.corr_after_table.string() + setup_args,
                [&](std::ostream& log) {
                  if (!r.model_after) throw InputError(updated_model.string(), "the updated model's modes are missing");
@@ -437,6 +479,11 @@ int RunRun(const std::vector<std::string>& args) {
       s.stabilisation = r.fit->stabilisation_json;
       s.fit = r.fit->fit;
       s.refine = r.fit->refine;
+      s.selection = {{"select", r.select},
+                     {"by_hand", r.picked_by_hand},
+                     {"rule", r.fit->fit.selection_rule},
+                     {"command", r.fit_command},
+                     {"modes_json", (fs::path(test.name) / "modes.json").generic_string()}};
       if (r.correlation_before && r.model_before)
         s.correlation_before = report::CorrelationView{r.correlation_before->result, r.fit->stored_modes, r.model_before->solution.modes};
       if (r.correlation_after && r.model_after)
@@ -480,6 +527,9 @@ int RunRun(const std::vector<std::string>& args) {
     std::snprintf(line, sizeof line, "  %-12s %5d %8d %6d  %-22s %-22s", test.name.c_str(), frf_count, rejected, modes,
                   before.c_str(), after.c_str());
     summary.push_back(line);
+    if (r.fit && r.picked_by_hand)  // a hand pick is kept only in this run: say how to repeat it
+      summary.push_back("  " + std::string(12, ' ') + " poles picked by hand (ema pick); to repeat without the browser: " +
+                        "select = \"" + r.select + "\" in its [[test]]");
     if (std::isfinite(agreement_nominal)) {
       agree_before += agreement_nominal;
       mac_before += mac_nominal;

@@ -235,6 +235,7 @@ json BuildReportData(const ReportInput& input) {
     json selected = json::array();
     for (const Mode& m : test.modes) selected.push_back(Round(m.frequency_hz));
     s["selected_hz"] = selected;
+    if (!setup.selection.is_null()) s["selection"] = setup.selection;
     s["frf"] = FrfData(setup);
     s["mac_before"] = MacData(setup.correlation_before);
     s["mac_after"] = MacData(setup.correlation_after);

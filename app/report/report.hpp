@@ -44,6 +44,10 @@ struct SetupResults {
   std::optional<CorrelationView> correlation_after;   ///< with the updated model
   std::vector<Node> geometry;          ///< test points (m), for the animated shapes
   std::vector<std::pair<int, int>> lines;  ///< wireframe edges between test points (node ids)
+  /// The pole selection the fit used: {"select": "auto" | "F1,F2,...", "by_hand": true when picked
+  /// in `ema pick` during the run, "rule": FitResult::selection_rule, "command": the equivalent
+  /// `ema fit` line, "modes_json": the modes file relative to the report}. Null: not shown.
+  nlohmann::json selection;
   double band_lo_hz = 0.0;             ///< fit band; 0/0 = the whole FRF range
   double band_hi_hz = 0.0;
 };

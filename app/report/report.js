@@ -480,9 +480,23 @@
     var stab = section(wrap, 'Stabilisation diagram — ' + setup.name,
       'Poles of every model order (filled: stable in frequency, damping and participation vector; diamonds: stable ' +
       'in frequency and one more criterion or frequency only; open circles: new or unstable; ×: non-physical). ' +
-      'Dashed lines: the modes selected automatically. Grey: sum of all FRF magnitudes; purple: the first two ' +
+      'Dashed lines: the modes selected (as the line below says). Grey: sum of all FRF magnitudes; purple: the first two ' +
       'singular values of the FRF matrix (CMIF: a peak in the second one is a close or repeated mode the sum hides); ' +
       'orange dots: the MMIF (0 to 1, dips at resonances). Drag to zoom, double-click to reset.');
+    // Which selection the fit used: the automatic rule, the project's frequencies, or a pick made
+    // by hand in ema pick during the run; the equivalent ema fit line repeats it in a script.
+    var sel = setup.selection;
+    if (sel && sel.select) {
+      var how = sel.by_hand ? 'picked by hand in ema pick during this run' :
+        sel.select === 'auto' ? 'automatic' : 'the frequencies the project gives';
+      var p = el('p', { 'class': 'selection', 'data-by-hand': sel.by_hand ? '1' : '0' },
+        ['Selection used: ' + how + (sel.rule ? ' (' + sel.rule + ')' : '') + '; modes: ']);
+      p.appendChild(el('a', { href: sel.modes_json, text: sel.modes_json }));
+      if (sel.by_hand) p.appendChild(document.createTextNode('. To repeat it without the browser: select = "' + sel.select +
+        '" in this test\'s [[test]].'));
+      stab.appendChild(p);
+      if (sel.command) stab.appendChild(el('pre', { 'class': 'command', text: sel.command }));
+    }
     var st = setup.stabilisation || {};
     if (st.order && st.order.length) {
       var groups = {};

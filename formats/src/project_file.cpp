@@ -52,6 +52,30 @@ std::vector<std::string> Strings(const fs::path& file, const toml::node& node, c
   throw InputError(Where(file, node), "'" + key + "' must be an array of strings");
 }
 
+// A selection as `ema fit --select` takes it: "auto" or positive frequencies in Hz, comma-separated.
+std::string Selection(const fs::path& file, const toml::node& node) {
+  const std::string text = String(file, node, "select");
+  if (text == "auto") return text;
+  std::stringstream items(text);
+  std::string item;
+  int count = 0;
+  while (std::getline(items, item, ',')) {
+    size_t used = 0;
+    double f = 0.0;
+    try {
+      f = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !(f > 0.0) || !std::isfinite(f))
+      throw InputError(Where(file, node), "'select' must be \"auto\" or positive frequencies in Hz, comma-separated "
+                                          "(\"196.4,266.7\"); got '" + item + "'");
+    ++count;
+  }
+  if (count == 0) throw InputError(Where(file, node), "'select' must be \"auto\" or F1,F2,... in Hz");
+  return text;
+}
+
 }  // namespace
 
 Project ReadProjectFile(const fs::path& path) {
@@ -83,7 +107,7 @@ Project ReadProjectFile(const fs::path& path) {
   for (const toml::node& node : *tests) {
     const toml::table* t = node.as_table();
     if (!t) throw InputError(Where(file, node), "[[test]] must be a table");
-    CheckKeys(file, *t, {"setup", "name", "time", "frf", "sensor_mass"}, "[[test]]");
+    CheckKeys(file, *t, {"setup", "name", "time", "frf", "sensor_mass", "select", "pick"}, "[[test]]");
     ProjectTest test;
     if ((*t)["setup"]) test.setup = String(file, *(*t)["setup"].node(), "setup");
     test.name = (*t)["name"] ? String(file, *(*t)["name"].node(), "name") : test.setup;
@@ -108,6 +132,12 @@ Project ReadProjectFile(const fs::path& path) {
         throw InputError(Where(file, *m), "sensor_mass must be a mass in kg per measured node, >= 0 (0.0112 for an "
                                           "11.2 g accelerometer)");
       test.sensor_mass = *v;
+    }
+    if (const toml::node* select = (*t)["select"].node()) test.select = Selection(file, *select);
+    if (const toml::node* pick = (*t)["pick"].node()) {
+      const auto v = pick->value<bool>();
+      if (!v) throw InputError(Where(file, *pick), "'pick' must be true or false");
+      test.pick = *v;
     }
     if (test.time.empty() && !test.frf)
       throw InputError(Where(file, *t), "[[test]] '" + test.name + "' needs time = [files] (or frf = \"FRF.unv\")");
@@ -134,7 +164,7 @@ Project ReadProjectFile(const fs::path& path) {
       if (!v || *v < 1) throw InputError(Where(file, *order), "'order_max' must be a positive integer");
       project.order_max = *v;
     }
-    if ((*fit)["select"]) project.select = String(file, *(*fit)["select"].node(), "select");
+    if ((*fit)["select"]) project.select = Selection(file, *(*fit)["select"].node());
     if ((*fit)["args"]) project.fit_extra = Strings(file, *(*fit)["args"].node(), "args");
   }
   if (const toml::table* diagnose = root["diagnose"].as_table()) {

@@ -22,6 +22,12 @@ struct ProjectTest {
   /// the test's own sensors, which the model's prediction of this test carries (cli.md, added
   /// turn 3). 0: none declared.
   double sensor_mass = 0.0;
+  /// This test's pole selection, as `ema fit --select` takes it ("auto" or "F1,F2,..." in Hz):
+  /// a pick made in `ema pick`, repeated without the browser. Empty: [fit] select.
+  std::string select;
+  /// pick = true: `ema run` opens `ema pick` for this test after its fit and goes on with the
+  /// selection on screen when the page's Done is pressed (docs/pick.md; `ema run --no-pick` skips it).
+  bool pick = false;
 };
 
 struct Project {
