@@ -22,9 +22,22 @@ namespace {
 using Coeffs = std::vector<std::pair<int, double>>;
 using Triplets = std::vector<Eigen::Triplet<double>>;
 
+// (node, dof 1..6) -> system index of the [fe] DOF map: one sorted array, not a node per DOF —
+// the diagnosis assembles a model once per candidate evaluation, thousands of times.
+struct FeDofIndex {
+  std::vector<std::pair<std::pair<int, int>, int>> sorted;
+  /// The system index, or -1 when the map has no such DOF.
+  int Find(int node, int dof) const {
+    const std::pair<int, int> key{node, dof};
+    auto it = std::lower_bound(sorted.begin(), sorted.end(), key,
+                               [](const auto& entry, const std::pair<int, int>& k) { return entry.first < k; });
+    return it != sorted.end() && it->first == key ? it->second : -1;
+  }
+};
+
 struct DofIndex {
   std::map<std::string, int> body_offset;
-  std::map<std::pair<int, int>, int> fe;  // (node, dof 1..6) -> index
+  FeDofIndex fe;
   int body_dofs = 0;
   int n = 0;
 };
@@ -67,15 +80,28 @@ DofIndex BuildIndex(const Model& model) {
       if (part.stiffness) check(*part.stiffness, part.stiffness_file, where);
       if (part.mass) check(*part.mass, part.mass_file, where);
     }
+    index.fe.sorted.reserve(fe.dofs.size());
     for (std::size_t i = 0; i < fe.dofs.size(); ++i) {
       const auto& d = fe.dofs[i];
       if (d.dof < 1 || d.dof > 6)
         throw InputError(fe.origin, "[fe] DOF map row " + std::to_string(i + 1) + ": dof " + std::to_string(d.dof) +
                                         " not in 1..6");
-      if (!index.fe.emplace(std::make_pair(d.node, d.dof), index.n + static_cast<int>(i)).second)
-        throw InputError(fe.origin, "[fe] DOF map row " + std::to_string(i + 1) + ": node " + std::to_string(d.node) +
-                                        " dof " + std::to_string(d.dof) + " appears twice");
+      index.fe.sorted.push_back({{d.node, d.dof}, index.n + static_cast<int>(i)});
     }
+    // Sorted by (node, dof), then by row: of two equal entries the second is the later row.
+    std::sort(index.fe.sorted.begin(), index.fe.sorted.end());
+    for (std::size_t k = 1; k < index.fe.sorted.size(); ++k)
+      if (index.fe.sorted[k].first == index.fe.sorted[k - 1].first) {
+        // The first row that repeats an earlier one, as a reading in row order finds it.
+        std::size_t first_repeat = k;
+        for (std::size_t j = k; j < index.fe.sorted.size(); ++j)
+          if (index.fe.sorted[j].first == index.fe.sorted[j - 1].first &&
+              index.fe.sorted[j].second < index.fe.sorted[first_repeat].second)
+            first_repeat = j;
+        const auto& [key, at] = index.fe.sorted[first_repeat];
+        throw InputError(fe.origin, "[fe] DOF map row " + std::to_string(at - index.n + 1) + ": node " +
+                                        std::to_string(key.first) + " dof " + std::to_string(key.second) + " appears twice");
+      }
     index.n += static_cast<int>(rows);
   }
   return index;
@@ -95,12 +121,12 @@ Kinematics Resolve(const Model& model, const DofIndex& index, const Anchor& anch
       throw InputError(where, what + " refers to FE node " + std::to_string(anchor.node) + " but the model has no [fe]");
     bool any = false;
     for (int i = 0; i < 3; ++i) {
-      auto it = index.fe.find({anchor.node, i + 1});
-      k.has_u[i] = it != index.fe.end();
-      if (k.has_u[i]) k.u[i].push_back({it->second, 1.0}), any = true;
-      auto jt = index.fe.find({anchor.node, i + 4});
-      k.has_theta[i] = jt != index.fe.end();
-      if (k.has_theta[i]) k.theta[i].push_back({jt->second, 1.0}), any = true;
+      const int u = index.fe.Find(anchor.node, i + 1);
+      k.has_u[i] = u >= 0;
+      if (k.has_u[i]) k.u[i].push_back({u, 1.0}), any = true;
+      const int theta = index.fe.Find(anchor.node, i + 4);
+      k.has_theta[i] = theta >= 0;
+      if (k.has_theta[i]) k.theta[i].push_back({theta, 1.0}), any = true;
     }
     if (!any) throw InputError(where, what + " refers to FE node " + std::to_string(anchor.node) + ", which has no DOF in the [fe] DOF map");
     auto pos = model.fe.node_positions.find(anchor.node);

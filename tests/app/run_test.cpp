@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "browser_check.hpp"
+#include "guideway_run.hpp"
 #include "ema/core/error.hpp"
 
 namespace ema {
@@ -28,22 +29,7 @@ using json = nlohmann::json;
 
 const fs::path kSample = fs::path(EMA_SOURCE_DIR) / "samples" / "guideway";
 
-// FNV-1a of every file under `dir`, by relative path: enough to see any change to the sample.
-std::map<std::string, std::uint64_t> HashTree(const fs::path& dir) {
-  std::map<std::string, std::uint64_t> out;
-  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
-    if (!entry.is_regular_file()) continue;
-    std::ifstream in(entry.path(), std::ios::binary);
-    std::uint64_t h = 1469598103934665603ull;
-    char buffer[65536];
-    while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
-      for (std::streamsize i = 0; i < in.gcount(); ++i) h = (h ^ static_cast<unsigned char>(buffer[i])) * 1099511628211ull;
-      if (!in) break;
-    }
-    out[fs::relative(entry.path(), dir).string()] = h;
-  }
-  return out;
-}
+using test::HashTree;
 
 std::string Slurp(const fs::path& path) {
   std::ifstream in(path);
@@ -62,54 +48,15 @@ int RunEma(const std::string& args, const fs::path& log) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-// What a run of the sample depends on: the ema executable (size and modification time) and the
-// sample's files.
-std::string RunStamp(const std::map<std::string, std::uint64_t>& sample) {
-  std::ostringstream s;
-  s << fs::file_size(EMA_EXECUTABLE) << " " << fs::last_write_time(EMA_EXECUTABLE).time_since_epoch().count();
-  for (const auto& [file, h] : sample) s << "\n" << file << " " << h;
-  return s.str();
-}
-
-// One run of the sample shared by the tests below, and by every ctest process: ctest runs each test
-// in its own process, maybe in parallel, and the run is the slowest part of the suite (under ASan
-// above all). The first process to take the lock runs it; the others wait, then reuse its output
-// while the stamp (executable and sample) still matches.
+// The sample's run, shared with every test process (tests/guideway_run.hpp).
 class GuidewayRun : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    const fs::path tmp(EMA_TEST_TMP_DIR);
-    out_ = new fs::path(tmp / "guideway-run");
-    log_ = new fs::path(tmp / "guideway-run.log");
-    const fs::path stamp_file = tmp / "guideway-run.stamp", before_file = tmp / "guideway-run.before";
-    const int lock = open((tmp / "guideway-run.lock").c_str(), O_CREAT | O_RDWR, 0644);
-    ASSERT_GE(lock, 0);
-    flock(lock, LOCK_EX);
-    const std::map<std::string, std::uint64_t> sample = HashTree(kSample);
-    const std::string stamp = RunStamp(sample);
-    std::stringstream cached;
-    if (std::ifstream in(stamp_file); in) cached << in.rdbuf();
-    std::string cached_code;
-    std::getline(cached, cached_code);
-    const std::string cached_stamp = cached.str().substr(std::min(cached.str().size(), cached_code.size() + 1));
-    if (!cached_code.empty() && cached_stamp == stamp) {
-      exit_code_ = std::stoi(cached_code);
-      before_ = new std::map<std::string, std::uint64_t>();
-      std::ifstream in(before_file);
-      std::string file;
-      std::uint64_t h = 0;
-      while (in >> std::quoted(file) >> h) (*before_)[file] = h;
-    } else {
-      fs::remove(stamp_file);
-      fs::remove_all(*out_);
-      before_ = new std::map<std::string, std::uint64_t>(sample);
-      exit_code_ = RunEma("run '" + (kSample / "project.toml").string() + "' -o '" + out_->string() + "'", *log_);
-      std::ofstream before(before_file);
-      for (const auto& [f, h] : sample) before << std::quoted(f) << " " << h << "\n";
-      std::ofstream(stamp_file) << exit_code_ << "\n" << stamp;
-    }
-    flock(lock, LOCK_UN);
-    close(lock);
+    test::SharedGuidewayRun run = test::GuidewayRunOnce();
+    out_ = new fs::path(run.out);
+    log_ = new fs::path(run.log);
+    before_ = new std::map<std::string, std::uint64_t>(std::move(run.before));
+    exit_code_ = run.exit_code;
   }
   static void TearDownTestSuite() {
     delete out_;  // the output stays for the other processes (~20 MB in the build's tmp folder)

@@ -1,6 +1,6 @@
 // `ema diagnose` options end to end (issue 17): --criterion bic|aicc, --shape-weight and
 // --force-level each change the output as documented, so an ignored or mis-wired option fails.
-// Test modes: the guideway sample's own fitted modes (`ema run`, about a second).
+// Test modes: the guideway sample's own fitted modes (`ema run`, shared: tests/guideway_run.hpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,6 +9,7 @@
 #include <string>
 
 #include "diagnose/chain_helpers.hpp"
+#include "guideway_run.hpp"
 #include "ema/formats/io.hpp"
 
 namespace ema {
@@ -27,29 +28,37 @@ class DiagnoseCli : public ::testing::Test {
     dir_ = new fs::path(fs::path(EMA_TEST_TMP_DIR) / ("diagnose-cli-" + std::to_string(getpid())));
     fs::remove_all(*dir_);
     fs::create_directories(*dir_);
-    run_ok_ = RunEma(*dir_, "run \"" + (kSample / "project.toml").string() + "\" -o \"" + (*dir_ / "run").string() +
-                                "\" --no-report",
-                     "run.log") == 0;
+    // The sample's run shared with every test process (tests/guideway_run.hpp): its modes.
+    const test::SharedGuidewayRun run = test::GuidewayRunOnce();
+    run_ok_ = run.exit_code == 0;
+    run_ = new fs::path(run.out);
+    run_log_ = new fs::path(run.log);
   }
   static void TearDownTestSuite() {
     std::error_code ignored;
     fs::remove_all(*dir_, ignored);
     delete dir_;
+    delete run_;
+    delete run_log_;
   }
-  void SetUp() override { ASSERT_TRUE(run_ok_) << Slurp(*dir_ / "run.log"); }
+  void SetUp() override { ASSERT_TRUE(run_ok_) << Slurp(*run_log_); }
   /// `ema diagnose` of the sample's model against both setups, with `extra` options.
   json Diagnose(const std::string& tag, const std::string& extra) {
     const fs::path out = *dir_ / (tag + ".json");
     const std::string args = "diagnose \"" + (kSample / "model.toml").string() + "\" --test stud-5um=\"" +
-                             (*dir_ / "run/stud-5um/modes.unv").string() + "\" --test stud-9um=\"" +
-                             (*dir_ / "run/stud-9um/modes.unv").string() + "\" --json \"" + out.string() + "\" " + extra;
+                             (*run_ / "stud-5um/modes.unv").string() + "\" --test stud-9um=\"" +
+                             (*run_ / "stud-9um/modes.unv").string() + "\" --json \"" + out.string() + "\" " + extra;
     EXPECT_EQ(RunEma(*dir_, args, tag + ".log"), 0) << Slurp(*dir_ / (tag + ".log"));
     return json::parse(Slurp(out));
   }
   static fs::path* dir_;
+  static fs::path* run_;
+  static fs::path* run_log_;
   static bool run_ok_;
 };
 fs::path* DiagnoseCli::dir_ = nullptr;
+fs::path* DiagnoseCli::run_ = nullptr;
+fs::path* DiagnoseCli::run_log_ = nullptr;
 bool DiagnoseCli::run_ok_ = false;
 
 TEST_F(DiagnoseCli, CriterionBicAndAiccScoreByTheirFormulas) {
@@ -114,7 +123,7 @@ TEST_F(DiagnoseCli, ForceLevelReportsTheAmplitudeTrend) {
   // Three levels built from the stud-5um modes with every frequency lowered by 0 %, 0.5 % and
   // 1 % (and damping unchanged): each mode is "softening" with a change of −1 % from the lowest
   // to the highest level, and damping "none" (ema amplitude's analysis, docs/amplitude.md).
-  const ModeSet modes = formats::ReadModeSet(*dir_ / "run/stud-5um/modes.unv");
+  const ModeSet modes = formats::ReadModeSet(*run_ / "stud-5um/modes.unv");
   const double shift[] = {1.0, 0.995, 0.99};
   std::string levels;
   for (int l = 0; l < 3; ++l) {
@@ -141,7 +150,7 @@ TEST_F(DiagnoseCli, ForceLevelReportsTheAmplitudeTrend) {
   }
   // One level alone is bad usage.
   EXPECT_EQ(RunEma(*dir_, "diagnose \"" + (kSample / "model.toml").string() + "\" --test \"" +
-                            (*dir_ / "run/stud-5um/modes.unv").string() + "\" --force-level 10=\"" +
+                            (*run_ / "stud-5um/modes.unv").string() + "\" --force-level 10=\"" +
                             (*dir_ / "level0.unv").string() + "\"",
                    "one-level.log"),
             2);

@@ -254,5 +254,24 @@ TEST(SolveErrors, FeDofMapNotMatchingMatrix) {
   }
 }
 
+// A DOF map naming one DOF twice: the message names the first row, in file order, that repeats an
+// earlier one (rows 4 and 5 both repeat; row 4 is read first), and a point on a node the map has is
+// resolved to that node's own DOFs (the sorted index's lookup).
+TEST(SolveErrors, FeDofMapRowRepeatingAnEarlierRowIsNamed) {
+  Model m;
+  m.fe.origin = "dofs.csv";
+  m.fe.mass = Eigen::SparseMatrix<double>(5, 5);
+  m.fe.stiffness = Eigen::SparseMatrix<double>(5, 5);
+  m.fe.dofs = {{7, 3}, {2, 1}, {5, 2}, {5, 2}, {2, 1}};
+  try {
+    Solve(m);
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string s = e.what();
+    EXPECT_NE(s.find("dofs.csv"), std::string::npos) << s;
+    EXPECT_NE(s.find("DOF map row 4: node 5 dof 2 appears twice"), std::string::npos) << s;
+  }
+}
+
 }  // namespace
 }  // namespace ema::model
