@@ -71,7 +71,9 @@ TEST(Polymax, OnePercentNoiseSixModes) {
     for (size_t r = 0; r < truth.modes.size(); ++r) {
       ASSERT_GE(match[r], 0);
       const Mode& m = fit.modes.modes[match[r]];
-      if (refine == RefineMethod::kNone) EXPECT_EQ(m.frequency_hz, fit.selected[match[r]].pole.frequency_hz);
+      if (refine == RefineMethod::kNone) {
+        EXPECT_EQ(m.frequency_hz, fit.selected[match[r]].pole.frequency_hz);
+      }
       // Issue 4 acceptance at 1 % noise: f within 0.05 %, zeta within 2 % (relative), MAC >= 0.995.
       EXPECT_NEAR(m.frequency_hz / truth.modes[r].f_hz, 1.0, 5e-4);
       EXPECT_NEAR(m.damping_ratio / truth.modes[r].zeta, 1.0, 0.02) << truth.modes[r].f_hz;

@@ -118,8 +118,9 @@ TEST_F(Acceptance, TwoEffectsOfDifferentKindsOnDifferentTargets) {
   // more than 0.05 below the model as given carries a negligible probability.
   const double mac0 = d["baseline"]["mean_mac"].get<double>();
   for (const json& c : d["candidates"])
-    if (c["mean_mac"].is_number() && c["mean_mac"].get<double>() < mac0 - 0.05)
+    if (c["mean_mac"].is_number() && c["mean_mac"].get<double>() < mac0 - 0.05) {
       EXPECT_LT(c["probability"].get<double>(), 1e-3) << c["kind"] << " " << c["target"];
+    }
   // Probabilities: rank 1 dominates and all of them (with "none") sum to 1.
   double sum = 0.0;
   for (const json& c : d["candidates"]) sum += c["probability"].get<double>();
