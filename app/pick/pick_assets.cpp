@@ -2,22 +2,12 @@
 // embeds its assets (app/report/embedded_assets.cpp); app/CMakeLists.txt passes their paths.
 #include <string>
 
+#include "embed_file.hpp"
 #include "embedded_assets.hpp"
 #include "pick/pick_page.hpp"
 
-#define EMA_PICK_EMBED(name, path)                              \
-  __asm__(".section .rodata\n"                                  \
-          ".balign 16\n"                                        \
-          ".global " #name "_begin\n" #name "_begin:\n"          \
-          ".incbin \"" path "\"\n"                               \
-          ".global " #name "_end\n" #name "_end:\n"              \
-          ".byte 0\n"                                           \
-          ".previous\n");                                       \
-  extern "C" const char name##_begin[];                         \
-  extern "C" const char name##_end[];
-
-EMA_PICK_EMBED(ema_pick_html, EMA_PICK_HTML_PATH)
-EMA_PICK_EMBED(ema_pick_js, EMA_PICK_JS_PATH)
+EMA_EMBED(ema_pick_html, EMA_PICK_HTML_PATH)
+EMA_EMBED(ema_pick_js, EMA_PICK_JS_PATH)
 
 namespace ema::app {
 

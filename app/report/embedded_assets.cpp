@@ -1,17 +1,7 @@
 // Assets embedded at build time with the assembler's .incbin: plotly.js (from `npm ci`, see
 // CMakeLists.txt) and the report's own script and style sheet. A trailing NUL is appended to each.
 #include "embedded_assets.hpp"
-
-#define EMA_EMBED(name, path)                                   \
-  __asm__(".section .rodata\n"                                  \
-          ".balign 16\n"                                        \
-          ".global " #name "_begin\n" #name "_begin:\n"          \
-          ".incbin \"" path "\"\n"                               \
-          ".global " #name "_end\n" #name "_end:\n"              \
-          ".byte 0\n"                                           \
-          ".previous\n");                                       \
-  extern "C" const char name##_begin[];                         \
-  extern "C" const char name##_end[];
+#include "embed_file.hpp"
 
 EMA_EMBED(ema_report_plotly_js, EMA_PLOTLY_JS_PATH)
 EMA_EMBED(ema_report_js, EMA_REPORT_JS_PATH)
