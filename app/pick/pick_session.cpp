@@ -359,6 +359,10 @@ std::string PickSession::EquivalentCommand() const {
 
 std::string PickSession::SelectText() const {
   std::lock_guard<std::mutex> lock(mutex_);
+  return SelectTextLocked();
+}
+
+std::string PickSession::SelectTextLocked() const {
   if (pick_.automatic) return "auto";
   std::string list;
   for (double f : pick_.requested_hz) {
@@ -383,11 +387,7 @@ std::string PickSession::EquivalentCommandLocked() const {
     command += " --damping-tol " + ExactNumberText(o.stability.damping_tol);
   if (o.stability.mac_min != defaults.stability.mac_min) command += " --mac-min " + ExactNumberText(o.stability.mac_min);
   if (o.polymax.threads != defaults.polymax.threads) command += " --threads " + std::to_string(o.polymax.threads);
-  if (!pick_.automatic && !pick_.requested_hz.empty()) {
-    std::string list;
-    for (double f : pick_.requested_hz) list += (list.empty() ? "" : ",") + ExactNumberText(f);
-    command += " --select " + list;
-  }
+  if (!pick_.automatic && !pick_.requested_hz.empty()) command += " --select " + SelectTextLocked();
   command += " -o " + (config_.output.empty() ? std::string("MODES.unv") : ShellWord(config_.output));
   if (!config_.json_path.empty()) command += " --json " + ShellWord(config_.json_path);
   if (!config_.stabilisation_path.empty()) command += " --stabilisation " + ShellWord(config_.stabilisation_path);

@@ -104,6 +104,7 @@ class PickSession {
   Pick FitPick(bool automatic, std::vector<double> requested_hz) const;
   nlohmann::json StateJsonLocked() const;
   std::string EquivalentCommandLocked() const;
+  std::string SelectTextLocked() const;
 
   mutable std::mutex mutex_;
   FitConfig config_;

@@ -255,8 +255,8 @@ TEST(SolveErrors, FeDofMapNotMatchingMatrix) {
 }
 
 // A DOF map naming one DOF twice: the message names the first row, in file order, that repeats an
-// earlier one (rows 4 and 5 both repeat; row 4 is read first), and a point on a node the map has is
-// resolved to that node's own DOFs (the sorted index's lookup).
+// earlier one (rows 4 and 5 both repeat; row 4 is read first). The sorted index's lookups are what
+// every FE model test resolves its springs, masses and points through.
 TEST(SolveErrors, FeDofMapRowRepeatingAnEarlierRowIsNamed) {
   Model m;
   m.fe.origin = "dofs.csv";
