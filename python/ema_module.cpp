@@ -504,44 +504,13 @@ void RequireSymmetric(const SparseMatrix& a, const std::string& label) {
     }
 }
 
-/// A part's matrix is a sum of element matrices, each positive semi-definite: an LDLᵀ of its
-/// non-zero rows, shifted by 1e-9 of its largest diagonal entry, has no negative pivot (as the
-/// model file's reader checks [[fe.part]] matrices).
+/// A part's matrix is a sum of element matrices, each positive semi-definite
+/// (ema::model::FirstNegativePivotRow, as the model file's reader checks [[fe.part]] matrices).
 void RequirePositiveSemiDefinite(const SparseMatrix& a, const ema::model::FeMatrices& fe, const std::string& label,
                                  const char* what) {
-  std::vector<int> used(static_cast<size_t>(a.rows()), -1), rows;
-  for (int c = 0; c < a.outerSize(); ++c)
-    for (SparseMatrix::InnerIterator it(a, c); it; ++it)
-      if (it.value() != 0.0 && used[static_cast<size_t>(it.row())] < 0) {
-        used[static_cast<size_t>(it.row())] = static_cast<int>(rows.size());
-        rows.push_back(static_cast<int>(it.row()));
-      }
-  if (rows.empty()) return;
-  std::vector<Eigen::Triplet<double>> entries;
-  double largest = 0.0;
-  for (int c = 0; c < a.outerSize(); ++c)
-    for (SparseMatrix::InnerIterator it(a, c); it; ++it) {
-      const int r = used[static_cast<size_t>(it.row())], k = used[static_cast<size_t>(it.col())];
-      if (r < 0 || k < 0) continue;
-      entries.emplace_back(r, k, it.value());
-      if (r == k) largest = std::max(largest, std::abs(it.value()));
-    }
-  const auto n = static_cast<Eigen::Index>(rows.size());
-  for (Eigen::Index i = 0; i < n; ++i) entries.emplace_back(i, i, 1e-9 * largest);
-  SparseMatrix sub(n, n);
-  sub.setFromTriplets(entries.begin(), entries.end());
-  const Eigen::SimplicialLDLT<SparseMatrix> ldlt(sub);
-  Eigen::Index bad = -1;
-  if (ldlt.info() == Eigen::Success) {
-    const Eigen::VectorXd d = ldlt.vectorD();
-    for (Eigen::Index i = 0; i < d.size() && bad < 0; ++i)
-      if (!(d(i) > 0.0)) bad = ldlt.permutationPinv().indices()(i);
-  } else {
-    bad = 0;
-  }
-  if (bad < 0) return;
+  const int row = ema::model::FirstNegativePivotRow(a);
+  if (row < 0) return;
   static const char* kDofNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
-  const int row = rows[static_cast<size_t>(bad)];
   const auto& dof = fe.dofs[static_cast<size_t>(row)];
   throw ema::InputError(label, std::string("the part's ") + what + " is not positive semi-definite (a negative pivot at node " +
                                    std::to_string(dof.node) + " " + kDofNames[std::clamp(dof.dof, 1, 6) - 1] + ", row " +

@@ -372,47 +372,17 @@ class Reader : public TomlFields {
     }
   }
 
-  // A part's matrix is a sum of element matrices, each positive semi-definite. An LDLᵀ of its
-  // non-zero rows, shifted by 1e-9 of its largest diagonal entry, then has no negative pivot
-  // (Sylvester's law of inertia); a negative one names the DOF.
+  // A part's matrix is a sum of element matrices, each positive semi-definite
+  // (model::FirstNegativePivotRow); a negative pivot names the DOF.
   static void RequirePositiveSemiDefinite(const Eigen::SparseMatrix<double>& a, const model::FeMatrices& fe,
                                           const std::string& where, const char* what) {
-    std::vector<int> used(static_cast<std::size_t>(a.rows()), -1), rows;
-    for (int c = 0; c < a.outerSize(); ++c)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it)
-        if (it.value() != 0.0 && used[static_cast<std::size_t>(it.row())] < 0) {
-          used[static_cast<std::size_t>(it.row())] = static_cast<int>(rows.size());
-          rows.push_back(static_cast<int>(it.row()));
-        }
-    if (rows.empty()) return;
-    std::vector<Eigen::Triplet<double>> entries;
-    double largest = 0.0;
-    for (int c = 0; c < a.outerSize(); ++c)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it) {
-        const int r = used[static_cast<std::size_t>(it.row())], k = used[static_cast<std::size_t>(it.col())];
-        if (r < 0 || k < 0) continue;
-        entries.emplace_back(r, k, it.value());
-        if (r == k) largest = std::max(largest, std::abs(it.value()));
-      }
-    const auto n = static_cast<Eigen::Index>(rows.size());
-    for (Eigen::Index i = 0; i < n; ++i) entries.emplace_back(i, i, 1e-9 * largest);
-    Eigen::SparseMatrix<double> sub(n, n);
-    sub.setFromTriplets(entries.begin(), entries.end());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(sub);
-    Eigen::Index bad = -1;
-    if (ldlt.info() == Eigen::Success) {
-      const Eigen::VectorXd d = ldlt.vectorD();
-      for (Eigen::Index i = 0; i < d.size() && bad < 0; ++i)
-        if (!(d(i) > 0.0)) bad = ldlt.permutationPinv().indices()(i);
-    } else {
-      bad = 0;
-    }
-    if (bad < 0) return;
+    const int row = model::FirstNegativePivotRow(a);
+    if (row < 0) return;
     static const char* kDofNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
-    const auto& dof = fe.dofs[static_cast<std::size_t>(rows[static_cast<std::size_t>(bad)])];
+    const auto& dof = fe.dofs[static_cast<std::size_t>(row)];
     throw InputError(where, std::string("the part's ") + what + " is not positive semi-definite (a negative pivot at node " +
                                 std::to_string(dof.node) + " " + kDofNames[std::clamp(dof.dof, 1, 6) - 1] +
-                                ", matrix row " + std::to_string(rows[static_cast<std::size_t>(bad)] + 1) +
+                                ", matrix row " + std::to_string(row + 1) +
                                 "): expected the sum of the part's element matrices, which adds no negative " +
                                 "stiffness or mass; with the part, K could be indefinite");
   }

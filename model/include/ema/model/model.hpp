@@ -228,6 +228,13 @@ struct FeMatrices {
   int Size() const { return static_cast<int>(dofs.size()); }
 };
 
+/// A part's matrix is a sum of element matrices, each positive semi-definite: an LDLᵀ of its
+/// non-zero rows, shifted by 1e-9 of its largest diagonal entry, then has no negative pivot
+/// (Sylvester's law of inertia). Returns the matrix row of the first non-positive pivot, or -1
+/// when there is none (also for a matrix without non-zero rows). The model file's reader and the
+/// Python binding name the DOF of that row in their own words.
+int FirstNegativePivotRow(const Eigen::SparseMatrix<double>& a);
+
 /// The whole spatial model.
 struct Model {
   std::string name;
