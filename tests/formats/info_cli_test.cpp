@@ -222,12 +222,9 @@ TEST(FormatsInfoQuirks, GeometryWithoutUnitsDatasetIsStated) {
   EXPECT_TRUE(said) << SummaryText(s);
 }
 
-// The same gap in a mode file: the reader says so (ModeSet::geometry_units_note), `ema correlate`
-// repeats it where it pairs nodes by distance, and ema's own mode files state SI.
-TEST(FormatsInfoQuirks, ModeFileGeometryWithoutUnitsIsNotedAndEmaWritesUnits) {
-  if (!HaveEma()) FAIL() << "ema not built";
-  std::string text = "    -1\n    15\n         1         0         0        11  0.0000000E+00  0.0000000E+00  0.0000000E+00\n"
-                     "         2         0         0        11  1.0000000E+03  0.0000000E+00  0.0000000E+00\n    -1\n";
+// Two real modes (100 and 200 Hz) at nodes 1 and 2 as UFF 55 records, without geometry.
+std::string TwoModes55() {
+  std::string text;
   for (int m = 1; m <= 2; ++m)
     text += "    -1\n    55\nmode\nNONE\nNONE\nNONE\nNONE\n"
             "         1         2         2         8         5         3\n"
@@ -235,6 +232,16 @@ TEST(FormatsInfoQuirks, ModeFileGeometryWithoutUnitsIsNotedAndEmaWritesUnits) {
             "  " + (m == 1 ? std::string("1.00000e+02") : std::string("2.00000e+02")) + "  0.00000e+00  0.00000e+00  1.00000e+00\n"
             "         1\n  1.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00\n"
             "         2\n  0.50000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00\n    -1\n";
+  return text;
+}
+
+// The same gap in a mode file: the reader says so (ModeSet::geometry_units_note), `ema correlate`
+// repeats it where it pairs nodes by distance, and ema's own mode files state SI.
+TEST(FormatsInfoQuirks, ModeFileGeometryWithoutUnitsIsNotedAndEmaWritesUnits) {
+  if (!HaveEma()) FAIL() << "ema not built";
+  std::string text = "    -1\n    15\n         1         0         0        11  0.0000000E+00  0.0000000E+00  0.0000000E+00\n"
+                     "         2         0         0        11  1.0000000E+03  0.0000000E+00  0.0000000E+00\n    -1\n";
+  text += TwoModes55();
   const fs::path f = WriteFile("modes55_no164.unv", text);
   const ModeSet read = ReadModeSet(f);
   ASSERT_EQ(read.geometry.size(), 2u);
@@ -258,15 +265,7 @@ TEST(FormatsInfoQuirks, ModeFileGeometryWithoutUnitsIsNotedAndEmaWritesUnits) {
 // `ema quality --modes MODES.unv` alone failed with "the option '--input' is required".
 TEST(FormatsInfoQuirks, QualityOfModesAloneNeedsNoFrfs) {
   if (!HaveEma()) FAIL() << "ema not built";
-  std::string text;
-  for (int m = 1; m <= 2; ++m)
-    text += "    -1\n    55\nmode\nNONE\nNONE\nNONE\nNONE\n"
-            "         1         2         2         8         5         3\n"
-            "         2         4         " + std::to_string(m) + "         " + std::to_string(m) + "\n"
-            "  " + (m == 1 ? std::string("1.00000e+02") : std::string("2.00000e+02")) + "  0.00000e+00  0.00000e+00  1.00000e+00\n"
-            "         1\n  1.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00\n"
-            "         2\n  0.50000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00  0.00000e+00\n    -1\n";
-  const fs::path f = WriteFile("modes55.unv", text);
+  const fs::path f = WriteFile("modes55.unv", TwoModes55());
   const CliRun r = Ema("quality --modes '" + f.string() + "'");
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("mode complexity: 2 checked"), std::string::npos) << r.out;
