@@ -1,5 +1,7 @@
 #include "ema/acquisition/impact.hpp"
 
+#include "antialias.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,7 +12,7 @@ namespace ema::acquisition {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using internal::kPi;
 
 std::string Format(const char* fmt, double a, double b = 0.0, double c = 0.0) {
   char buf[256];

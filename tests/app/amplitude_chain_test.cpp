@@ -19,6 +19,7 @@
 #include <sstream>
 
 #include "ema/formats/io.hpp"
+#include "test_files.hpp"
 
 namespace ema {
 namespace {
@@ -34,19 +35,11 @@ const fs::path kSample = fs::path(EMA_SOURCE_DIR) / "samples" / "joint";
 // truth's for seeds 3..7 (a weaker window of 120 1/s: within 20 %, 80 1/s: 44 % off).
 constexpr int kWindowRate = 200;
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
+using test::Slurp;
 
 void Write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
-int RunEma(const std::string& args, const fs::path& dir) {
-  const std::string command = std::string(EMA_EXECUTABLE) + " " + args + " > '" + (dir / "stdout.txt").string() +
-                              "' 2> '" + (dir / "stderr.txt").string() + "'";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using test::RunEma;
 
 json Load(const fs::path& p) {
   std::ifstream in(p);

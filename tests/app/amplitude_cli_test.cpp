@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ema/formats/io.hpp"
+#include "test_files.hpp"
 
 namespace ema {
 namespace {
@@ -24,17 +25,9 @@ fs::path Dir(const std::string& name) {
   return d;
 }
 
-int RunEma(const std::string& args, const fs::path& dir) {
-  const std::string command = std::string(EMA_EXECUTABLE) + " " + args + " > '" + (dir / "stdout.txt").string() +
-                              "' 2> '" + (dir / "stderr.txt").string() + "'";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using test::RunEma;
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
+using test::Slurp;
 
 // Two modes on three DOFs; mode 1 at f1, ζ1, mode 2 fixed at 250 Hz, 0.8 %.
 fs::path WriteModes(const fs::path& dir, const std::string& name, double f1, double zeta1) {

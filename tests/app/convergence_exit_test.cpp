@@ -11,14 +11,13 @@
 #include <regex>
 #include <string>
 
+#include "test_files.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
+using ema::test::Slurp;
 
 TEST(ConvergenceExit, TimeIntegrationThatCannotConvergeExitsWithThree) {
   const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / ("convergence_" + std::to_string(::getpid()));

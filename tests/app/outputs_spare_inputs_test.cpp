@@ -14,6 +14,8 @@
 #include <sstream>
 #include <string>
 
+#include "test_files.hpp"
+
 namespace ema {
 namespace {
 
@@ -21,12 +23,7 @@ namespace fs = std::filesystem;
 
 const fs::path kSource = fs::path(EMA_SOURCE_DIR);
 
-std::string ReadAll(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::Slurp;
 
 struct Snapshot {
   std::map<std::string, std::pair<std::string, fs::file_time_type>> files;  // bytes, mtime
@@ -36,7 +33,7 @@ Snapshot Take(const fs::path& dir) {
   Snapshot s;
   for (const auto& e : fs::recursive_directory_iterator(dir)) {
     if (e.is_symlink() || !e.is_regular_file()) continue;
-    s.files[fs::relative(e.path(), dir).string()] = {ReadAll(e.path()), fs::last_write_time(e.path())};
+    s.files[fs::relative(e.path(), dir).string()] = {Slurp(e.path()), fs::last_write_time(e.path())};
   }
   return s;
 }
@@ -71,7 +68,7 @@ class OutputsSpareInputs : public ::testing::Test {
     const std::string command =
         "cd '" + dir_.string() + "' && " + std::string(EMA_EXECUTABLE) + " " + args + " > '" + log.string() + "' 2>&1";
     const int status = std::system(command.c_str());
-    output_ = ReadAll(log);
+    output_ = Slurp(log);
     fs::remove(log);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }

@@ -31,6 +31,7 @@
 #include "ema/formats/io.hpp"
 #include "pick/pick_server.hpp"
 #include "pick/pick_session.hpp"
+#include "test_files.hpp"
 // After Eigen: httplib.h brings <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>
 
@@ -66,12 +67,7 @@ fs::path WriteSyntheticFrfs(const fs::path& dir) {
 // The fit options every test here uses: a band around the three modes, 30 orders.
 const std::vector<std::string> kFitOptions = {"--band", "10:110", "--order-max", "30"};
 
-std::string ReadAll(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::Slurp;
 
 // A UFF file without its date/time fields (header 151, the ID lines of 55): "25-Nov-26 12:34:46 ...".
 std::string WithoutDates(const std::string& text) {
@@ -90,10 +86,10 @@ std::string WithoutDates(const std::string& text) {
   return out;
 }
 
-int RunEma(const std::string& args, const fs::path& dir, std::string* output = nullptr) {
+int RunEmaCapturing(const std::string& args, const fs::path& dir, std::string* output = nullptr) {
   const fs::path log = dir / "ema-run.log";
   const int status = std::system((std::string(EMA_EXECUTABLE) + " " + args + " > '" + log.string() + "' 2>&1").c_str());
-  if (output) *output = ReadAll(log);
+  if (output) *output = Slurp(log);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -154,7 +150,7 @@ class PickProcess {
     std::lock_guard<std::mutex> lock(mutex_);
     return out_;
   }
-  std::string Errors() const { return ReadAll(stderr_path_); }
+  std::string Errors() const { return Slurp(stderr_path_); }
   /// The exit code once the process ended within `timeout_s`; -1 if it is still running.
   int Wait(int timeout_s) {
     for (const auto end = Clock::now() + std::chrono::seconds(timeout_s); exit_code_ == kRunning && Clock::now() < end;) {
@@ -257,20 +253,20 @@ TEST(PickCli, RefusesBadUsageBeforeServing) {
   const fs::path dir = TestDir();
   const std::string frf = WriteSyntheticFrfs(dir).string();
   std::string out;
-  EXPECT_EQ(RunEma("pick --help", dir, &out), 0);
+  EXPECT_EQ(RunEmaCapturing("pick --help", dir, &out), 0);
   EXPECT_NE(out.find("usage: ema pick FRF.unv"), std::string::npos) << out;
   EXPECT_NE(out.find("--no-browser"), std::string::npos) << out;
   EXPECT_NE(out.find("--order-max"), std::string::npos) << out;  // ema fit's options too
-  EXPECT_EQ(RunEma("pick --no-browser", dir, &out), 2) << out;
+  EXPECT_EQ(RunEmaCapturing("pick --no-browser", dir, &out), 2) << out;
   EXPECT_NE(out.find("the FRF file is required"), std::string::npos) << out;
-  EXPECT_EQ(RunEma("pick " + frf + " -o " + frf + " --no-browser", dir, &out), 2) << out;  // output over the input
+  EXPECT_EQ(RunEmaCapturing("pick " + frf + " -o " + frf + " --no-browser", dir, &out), 2) << out;  // output over the input
   EXPECT_NE(out.find("refused"), std::string::npos) << out;
-  EXPECT_EQ(RunEma("pick " + frf + " --json " + (dir / "m.json").string() + " --no-browser", dir, &out), 2) << out;
-  EXPECT_EQ(RunEma("pick " + frf + " --method peak --no-browser", dir, &out), 2) << out;
-  EXPECT_EQ(RunEma("pick " + frf + " --port http --no-browser", dir, &out), 2) << out;
-  EXPECT_EQ(RunEma("pick " + frf + " --frobnicate --no-browser", dir, &out), 2) << out;
+  EXPECT_EQ(RunEmaCapturing("pick " + frf + " --json " + (dir / "m.json").string() + " --no-browser", dir, &out), 2) << out;
+  EXPECT_EQ(RunEmaCapturing("pick " + frf + " --method peak --no-browser", dir, &out), 2) << out;
+  EXPECT_EQ(RunEmaCapturing("pick " + frf + " --port http --no-browser", dir, &out), 2) << out;
+  EXPECT_EQ(RunEmaCapturing("pick " + frf + " --frobnicate --no-browser", dir, &out), 2) << out;
   EXPECT_NE(out.find("usage: ema pick"), std::string::npos) << out;
-  EXPECT_EQ(RunEma("pick " + (dir / "missing.unv").string() + " --no-browser", dir, &out), 1) << out;
+  EXPECT_EQ(RunEmaCapturing("pick " + (dir / "missing.unv").string() + " --no-browser", dir, &out), 1) << out;
   EXPECT_FALSE(fs::exists(dir / "m.json"));
 }
 
@@ -494,10 +490,10 @@ TEST(PickBrowser, ClickedPolesFitSaveAndEqualEmaFitSelect) {
   cli = std::regex_replace(cli, std::regex("picked\\.unv"), "cli.unv");
   cli = std::regex_replace(cli, std::regex("picked\\.json"), "cli.json");
   std::string cli_out;
-  ASSERT_EQ(RunEma(cli, dir, &cli_out), 0) << cli << "\n" << cli_out;
-  EXPECT_EQ(WithoutDates(ReadAll(dir / "picked.unv")), WithoutDates(ReadAll(dir / "cli.unv")));
-  EXPECT_EQ(ReadAll(dir / "picked.json"), ReadAll(dir / "cli.json"));
-  const json modes = json::parse(ReadAll(dir / "picked.json"));
+  ASSERT_EQ(RunEmaCapturing(cli, dir, &cli_out), 0) << cli << "\n" << cli_out;
+  EXPECT_EQ(WithoutDates(Slurp(dir / "picked.unv")), WithoutDates(Slurp(dir / "cli.unv")));
+  EXPECT_EQ(Slurp(dir / "picked.json"), Slurp(dir / "cli.json"));
+  const json modes = json::parse(Slurp(dir / "picked.json"));
   ASSERT_EQ(modes["modes"].size(), 2u);
   EXPECT_DOUBLE_EQ(modes["modes"][1]["frequency_hz"].get<double>(), state["modes"][1]["frequency_hz"].get<double>());
 
@@ -530,7 +526,7 @@ TEST(PickBrowser, GuidewayRemoveAndRepickAMode) {
   const fs::path dir = TestDir();
   const fs::path frf = dir / "frf.unv";
   std::string out;
-  ASSERT_EQ(RunEma("frf " + (fs::path(EMA_SOURCE_DIR) / "samples/guideway/data/stud-5um.unv").string() + " -o " + frf.string(),
+  ASSERT_EQ(RunEmaCapturing("frf " + (fs::path(EMA_SOURCE_DIR) / "samples/guideway/data/stud-5um.unv").string() + " -o " + frf.string(),
                    dir, &out), 0) << out;
   PickProcess pick;
   ASSERT_TRUE(pick.Start({frf.string(), "--band", "100:450"}, dir)) << pick.Output() << pick.Errors();
@@ -602,28 +598,28 @@ TEST(PickRun, RunWaitsForThePickAndGoesOnWithIt) {
   EXPECT_EQ(done->status, 200);
   ASSERT_EQ(run.Wait(180), 0) << run.Output() << run.Errors();
 
-  const json modes = json::parse(ReadAll(out / "stud-5um" / "modes.json"));
+  const json modes = json::parse(Slurp(out / "stud-5um" / "modes.json"));
   ASSERT_EQ(modes["modes"].size(), 3u);
   const double expected_hz[] = {196.4, 267.4, 311.4};
   for (size_t k = 0; k < 3; ++k)  // the picked poles, refined: within 1 % of where they were picked
     EXPECT_NEAR(modes["modes"][k]["frequency_hz"].get<double>(), expected_hz[k], 0.01 * expected_hz[k]);
-  const std::string log = ReadAll(out / "logs" / "stud-5um-fit.txt");
+  const std::string log = Slurp(out / "logs" / "stud-5um-fit.txt");
   EXPECT_EQ(log.rfind("$ ema fit ", 0), 0u) << log.substr(0, 200);
   EXPECT_NE(log.find("--select 196.4,267.4,311.4"), std::string::npos) << log.substr(0, 300);
-  const std::string summary = ReadAll(out / "summary.txt");
+  const std::string summary = Slurp(out / "summary.txt");
   EXPECT_NE(summary.find("poles picked by hand (ema pick); to repeat without the browser: select = \"196.4,267.4,311.4\""),
             std::string::npos) << summary;
-  const std::string report = ReadAll(out / "report.html");
+  const std::string report = Slurp(out / "report.html");
   EXPECT_NE(report.find(R"("by_hand":true)"), std::string::npos);
   EXPECT_NE(report.find(R"("modes_json":"stud-5um/modes.json")"), std::string::npos);
 
   // The advice followed: the same pick from the project file, no browser.
   std::string printed;
-  ASSERT_EQ(RunEma("run " + project("repeated.toml", "select = \"196.4,267.4,311.4\"\npick = true\n") + " -o " +
+  ASSERT_EQ(RunEmaCapturing("run " + project("repeated.toml", "select = \"196.4,267.4,311.4\"\npick = true\n") + " -o " +
                        (dir / "again").string() + " --no-pick --no-report",
                    dir, &printed), 0) << printed;
   EXPECT_EQ(printed.find("pick the poles"), std::string::npos) << printed;
-  const json again = json::parse(ReadAll(dir / "again" / "stud-5um" / "modes.json"));
+  const json again = json::parse(Slurp(dir / "again" / "stud-5um" / "modes.json"));
   ASSERT_EQ(again["modes"].size(), 3u);
   for (size_t k = 0; k < 3; ++k)
     EXPECT_EQ(again["modes"][k]["frequency_hz"].get<double>(), modes["modes"][k]["frequency_hz"].get<double>());

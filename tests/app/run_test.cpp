@@ -20,6 +20,7 @@
 #include "browser_check.hpp"
 #include "guideway_run.hpp"
 #include "ema/core/error.hpp"
+#include "test_files.hpp"
 
 namespace ema {
 namespace {
@@ -31,10 +32,7 @@ const fs::path kSample = fs::path(EMA_SOURCE_DIR) / "samples" / "guideway";
 
 using test::HashTree;
 
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using test::Slurp;
 
 json Load(const fs::path& path) {
   std::ifstream in(path);
@@ -42,7 +40,7 @@ json Load(const fs::path& path) {
   return in ? json::parse(in) : json();
 }
 
-int RunEma(const std::string& args, const fs::path& log) {
+int RunEmaLogged(const std::string& args, const fs::path& log) {
   const std::string command = std::string(EMA_EXECUTABLE) + " " + args + " > '" + log.string() + "' 2>&1";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -88,7 +86,7 @@ TEST_F(GuidewayRun, NoReportWritesTheSameResultsWithoutThePage) {
   ASSERT_EQ(exit_code_, 0);
   const fs::path out = fs::path(EMA_TEST_TMP_DIR) / ("guideway-no-report-" + std::to_string(getpid()));
   fs::remove_all(out);
-  ASSERT_EQ(RunEma("run '" + (kSample / "project.toml").string() + "' -o '" + out.string() + "' --no-report", out.string() + ".log"), 0);
+  ASSERT_EQ(RunEmaLogged("run '" + (kSample / "project.toml").string() + "' -o '" + out.string() + "' --no-report", out.string() + ".log"), 0);
   EXPECT_FALSE(fs::exists(out / "report.html"));
   EXPECT_TRUE(fs::is_regular_file(out / "summary.txt"));
   // The page is the only difference: the diagnosis is the same to the last digit.
@@ -147,7 +145,7 @@ TEST_F(GuidewayRun, StepOutputsMatchTheSubcommand) {
   ASSERT_EQ(exit_code_, 0);
   // `ema run` calls the subcommands in-process: the same command typed by hand writes the same file.
   const fs::path modes = *out_ / "stud-9um" / "modes.unv", again = *out_ / "correlation-again.json";
-  ASSERT_EQ(RunEma("correlate '" + modes.string() + "' '" + (kSample / "model.toml").string() +
+  ASSERT_EQ(RunEmaLogged("correlate '" + modes.string() + "' '" + (kSample / "model.toml").string() +
                        "' --setup stud-9um --json '" + again.string() + "'",
                    *out_ / "correlate-again.log"),
             0);
@@ -183,9 +181,9 @@ TEST(RunProjectFile, BadProjectExitsOneAndWritesNothing) {
   fs::create_directories(dir);
   std::ofstream(dir / "model.toml") << "[model]\nname = \"x\"\n";
   std::ofstream(dir / "unknown.toml") << "[project]\nmodel = \"model.toml\"\ncolour = 3\n";
-  EXPECT_EQ(RunEma("run '" + (dir / "unknown.toml").string() + "' -o '" + (dir / "out").string() + "'", dir / "log1.txt"), 1);
+  EXPECT_EQ(RunEmaLogged("run '" + (dir / "unknown.toml").string() + "' -o '" + (dir / "out").string() + "'", dir / "log1.txt"), 1);
   EXPECT_FALSE(fs::exists(dir / "out"));
-  EXPECT_EQ(RunEma("run --no-such-option", dir / "log2.txt"), 2);
+  EXPECT_EQ(RunEmaLogged("run --no-such-option", dir / "log2.txt"), 2);
 }
 
 TEST(RunProjectFile, OutputBinaryWritesTheFrfsAs58b) {
@@ -205,7 +203,7 @@ TEST(RunProjectFile, OutputBinaryWritesTheFrfsAs58b) {
   }
   std::ofstream(dir / "project.toml") << text << "\n[output]\nbinary = true\n";
   const fs::path out = dir / "out";
-  ASSERT_EQ(RunEma("run '" + (dir / "project.toml").string() + "' -o '" + out.string() + "' --no-report", dir / "log.txt"), 0);
+  ASSERT_EQ(RunEmaLogged("run '" + (dir / "project.toml").string() + "' -o '" + out.string() + "' --no-report", dir / "log.txt"), 0);
   for (const char* test : {"stud-5um", "stud-9um"}) {
     std::ifstream frf(out / test / "frf.unv", std::ios::binary);
     std::string line;

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "browser_check.hpp"
+#include "test_files.hpp"
 
 namespace ema {
 namespace {
@@ -21,10 +22,7 @@ int RunShell(const std::string& command, const fs::path& log) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using test::Slurp;
 
 TEST(SampleBoltedFrame, RunNamesTheLoosenedJointFromCalculixParts) {
   if (std::system("command -v ccx > /dev/null 2>&1") != 0) {

@@ -27,14 +27,14 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 // One folder per process: ctest runs the tests of this file in parallel and they share file names.
-const fs::path kTmp = fs::path(EMA_TEST_TMP_DIR) / ("diagnose_real_chain-" + std::to_string(getpid()));
+const fs::path kChainTmp = fs::path(EMA_TEST_TMP_DIR) / ("diagnose_real_chain-" + std::to_string(getpid()));
 
 using test_chain::HaveExecutable;
 using test_chain::Slurp;
 using test_chain::Vec;
 using test_chain::Write;
 
-int RunEma(const std::string& args, const std::string& log) { return test_chain::RunEma(kTmp, args, log); }
+int RunEma(const std::string& args, const std::string& log) { return test_chain::RunEma(kChainTmp, args, log); }
 
 using test_chain::ModelToml;
 
@@ -55,19 +55,19 @@ std::string PlanToml(unsigned seed) {
 
 // simulate → frf → fit for one setup; returns the modes file.
 fs::path Chain(const fs::path& model, const std::string& setup, const std::string& tag, unsigned seed) {
-  const fs::path plan = kTmp / (tag + "-plan.toml");
+  const fs::path plan = kChainTmp / (tag + "-plan.toml");
   Write(plan, PlanToml(seed));
-  const fs::path time = kTmp / (tag + ".unv"), frf = kTmp / (tag + "-frf.unv"), modes = kTmp / (tag + "-modes.unv");
+  const fs::path time = kChainTmp / (tag + ".unv"), frf = kChainTmp / (tag + "-frf.unv"), modes = kChainTmp / (tag + "-modes.unv");
   const std::string s = setup.empty() ? "" : " --setup " + setup;
   EXPECT_EQ(RunEma("simulate \"" + model.string() + "\" --plan \"" + plan.string() + "\" -o \"" + time.string() + "\"" + s +
                     " --binary",
                 tag + "-simulate.log"),
             0)
-      << Slurp(kTmp / (tag + "-simulate.log"));
+      << Slurp(kChainTmp / (tag + "-simulate.log"));
   EXPECT_EQ(RunEma("frf \"" + time.string() + "\" -o \"" + frf.string() + "\"", tag + "-frf.log"), 0)
-      << Slurp(kTmp / (tag + "-frf.log"));
+      << Slurp(kChainTmp / (tag + "-frf.log"));
   EXPECT_EQ(RunEma("fit \"" + frf.string() + "\" -o \"" + modes.string() + "\" --band 40:1000", tag + "-fit.log"), 0)
-      << Slurp(kTmp / (tag + "-fit.log"));
+      << Slurp(kChainTmp / (tag + "-fit.log"));
   return modes;
 }
 
@@ -76,9 +76,9 @@ json Diagnose(const fs::path& model, const std::vector<std::pair<std::string, fs
   std::string args = "diagnose \"" + model.string() + "\"";
   for (const auto& [setup, modes] : tests)
     args += " --test \"" + (setup.empty() ? "" : setup + "=") + modes.string() + "\"";
-  const fs::path out = kTmp / (tag + "-diag.json");
-  args += " --json \"" + out.string() + "\" -o \"" + (kTmp / (tag + "-updated.toml")).string() + "\" " + extra;
-  EXPECT_EQ(RunEma(args, tag + "-diagnose.log"), 0) << Slurp(kTmp / (tag + "-diagnose.log"));
+  const fs::path out = kChainTmp / (tag + "-diag.json");
+  args += " --json \"" + out.string() + "\" -o \"" + (kChainTmp / (tag + "-updated.toml")).string() + "\" " + extra;
+  EXPECT_EQ(RunEma(args, tag + "-diagnose.log"), 0) << Slurp(kChainTmp / (tag + "-diagnose.log"));
   return json::parse(Slurp(out));
 }
 
@@ -86,12 +86,12 @@ class RealChain : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!HaveExecutable()) FAIL() << "the ema executable is not built: " << EMA_EXECUTABLE;
-    fs::create_directories(kTmp);
-    Write(kTmp / "nominal.toml", ModelToml());
+    fs::create_directories(kChainTmp);
+    Write(kChainTmp / "nominal.toml", ModelToml());
   }
   // The nominal model plus one [[effect]] block: the hidden truth.
   fs::path Truth(const std::string& tag, const std::string& effect_block, const std::string& lateral = "bearings") {
-    const fs::path p = kTmp / (tag + "-truth.toml");
+    const fs::path p = kChainTmp / (tag + "-truth.toml");
     Write(p, ModelToml(lateral) + "\n[[effect]]\n" + effect_block + "\n");
     return p;
   }
@@ -122,7 +122,7 @@ TEST_F(RealChain, EveryEffectKindRanksFirstWithItsParameter) {
     SCOPED_TRACE(h.tag);
     const fs::path truth = Truth(h.tag, h.block);
     const fs::path modes = Chain(truth, "", h.tag, ++seed);
-    const json d = Diagnose(kTmp / "nominal.toml", {{"", modes}}, h.tag);  // full search: members, combinations
+    const json d = Diagnose(kChainTmp / "nominal.toml", {{"", modes}}, h.tag);  // full search: members, combinations
     const json& first = d["candidates"][0];
     EXPECT_EQ(first["kind"], h.kind) << d["explanation"];
     EXPECT_EQ(first["target"], h.target) << d["explanation"];
@@ -135,8 +135,8 @@ TEST_F(RealChain, EveryEffectKindRanksFirstWithItsParameter) {
 }
 
 TEST_F(RealChain, NoHiddenEffectRanksNone) {
-  const fs::path modes = Chain(kTmp / "nominal.toml", "", "none", 3);
-  const json d = Diagnose(kTmp / "nominal.toml", {{"", modes}}, "none");
+  const fs::path modes = Chain(kChainTmp / "nominal.toml", "", "none", 3);
+  const json d = Diagnose(kChainTmp / "nominal.toml", {{"", modes}}, "none");
   EXPECT_EQ(d["candidates"][0]["kind"], "none") << d["explanation"];
   EXPECT_GT(d["candidates"][0]["probability"].get<double>(), 0.5) << d["explanation"];
   EXPECT_TRUE(d["candidates"][0]["effects"].empty());
@@ -145,7 +145,7 @@ TEST_F(RealChain, NoHiddenEffectRanksNone) {
 TEST_F(RealChain, TwoStudSettingsSeparateComplianceFromStiffnessScale) {
   // "bearings" = four identical vertical pads (lateral pads in their own group): one setup
   // cannot tell a series compliance from a stiffness factor; two stud settings can.
-  const fs::path nominal = kTmp / "nominal-lateral.toml";
+  const fs::path nominal = kChainTmp / "nominal-lateral.toml";
   Write(nominal, ModelToml("lateral"));
   const fs::path truth =
       Truth("two", "kind = \"series_compliance\"\ntarget = \"bearings\"\nlaw = { linear = { k = 6.5e6 } }", "lateral");
@@ -181,24 +181,24 @@ TEST_F(RealChain, GuidewayWithSensorsDeclaredRanksTheMountComplianceAlone) {
   std::vector<std::pair<std::string, fs::path>> tests;
   for (const std::string s : {"5", "9"}) {
     const std::string tag = "gw" + s;
-    const fs::path time = kTmp / (tag + ".unv"), frf = kTmp / (tag + "-frf.unv"), modes = kTmp / (tag + "-modes.unv");
+    const fs::path time = kChainTmp / (tag + ".unv"), frf = kChainTmp / (tag + "-frf.unv"), modes = kChainTmp / (tag + "-modes.unv");
     ASSERT_EQ(RunEma("simulate \"" + (sample / "truth" / "model.toml").string() + "\" --plan \"" +
                       (sample / "truth" / ("plan-stud-" + s + "um.toml")).string() + "\" -o \"" + time.string() +
                       "\" --binary",
                   tag + "-simulate.log"),
               0)
-        << Slurp(kTmp / (tag + "-simulate.log"));
+        << Slurp(kChainTmp / (tag + "-simulate.log"));
     ASSERT_EQ(RunEma("frf \"" + time.string() + "\" -o \"" + frf.string() + "\"", tag + "-frf.log"), 0);
     ASSERT_EQ(RunEma("fit \"" + frf.string() + "\" -o \"" + modes.string() + "\" --band 100:450 --json \"" +
-                         (kTmp / (tag + "-modes.json")).string() + "\"",
+                         (kChainTmp / (tag + "-modes.json")).string() + "\"",
                      tag + "-fit.log"),
               0)
-        << Slurp(kTmp / (tag + "-fit.log"));
+        << Slurp(kChainTmp / (tag + "-fit.log"));
     // The fit models each roving set's own poles: accepted, at the data's noise, no sign warning.
-    const std::string fit_log = Slurp(kTmp / (tag + "-fit.log"));
+    const std::string fit_log = Slurp(kChainTmp / (tag + "-fit.log"));
     EXPECT_NE(fit_log.find("ML refinement: converged"), std::string::npos) << fit_log;
     EXPECT_EQ(fit_log.find("negative modal mass"), std::string::npos) << fit_log;
-    const json fitted = json::parse(Slurp(kTmp / (tag + "-modes.json")));
+    const json fitted = json::parse(Slurp(kChainTmp / (tag + "-modes.json")));
     EXPECT_EQ(fitted["roving_sets"].size(), 4u);
     EXPECT_LT(fitted["refinement"]["reduced_chi2"].get<double>(), 2.0);
     tests.push_back({"stud-" + s + "um", modes});
@@ -229,38 +229,38 @@ TEST_F(RealChain, GuidewayWithSensorsDeclaredRanksTheMountComplianceAlone) {
   const json bare = Diagnose(sample / "model.toml", tests, "gw-bare");
   EXPECT_GT(bare["candidates"][0]["effects"].size(), 1u) << bare["explanation"];
   // -o wrote the model with the effect appended and the rest kept.
-  const std::string updated = Slurp(kTmp / "gw-updated.toml");
+  const std::string updated = Slurp(kChainTmp / "gw-updated.toml");
   EXPECT_NE(updated.find("kind = \"series_compliance\""), std::string::npos);
   EXPECT_EQ(updated.rfind(Slurp(sample / "model.toml"), 0), 0u);
 }
 
 TEST_F(RealChain, BadInputExitsOne) {
-  Write(kTmp / "empty.unv", "");
-  EXPECT_EQ(RunEma("correlate \"" + (kTmp / "empty.unv").string() + "\" \"" + (kTmp / "nominal.toml").string() + "\"",
+  Write(kChainTmp / "empty.unv", "");
+  EXPECT_EQ(RunEma("correlate \"" + (kChainTmp / "empty.unv").string() + "\" \"" + (kChainTmp / "nominal.toml").string() + "\"",
                 "bad1.log"),
             1);
-  EXPECT_EQ(RunEma("diagnose \"" + (kTmp / "nominal.toml").string() + "\" --test nosuch=\"" +
-                    (kTmp / "empty.unv").string() + "\"",
+  EXPECT_EQ(RunEma("diagnose \"" + (kChainTmp / "nominal.toml").string() + "\" --test nosuch=\"" +
+                    (kChainTmp / "empty.unv").string() + "\"",
                 "bad2.log"),
             1);
   // Usage errors exit 2.
   EXPECT_EQ(RunEma("correlate", "bad3.log"), 2);
-  EXPECT_EQ(RunEma("diagnose \"" + (kTmp / "nominal.toml").string() + "\" --test a.unv --criterion nonsense", "bad4.log"), 2);
+  EXPECT_EQ(RunEma("diagnose \"" + (kChainTmp / "nominal.toml").string() + "\" --test a.unv --criterion nonsense", "bad4.log"), 2);
   // Model modes of a setup the model lacks.
-  const fs::path modes = kTmp / "nominal-modes.unv";
-  ASSERT_EQ(RunEma("model \"" + (kTmp / "nominal.toml").string() + "\" -o \"" + modes.string() + "\"", "bad5.log"), 0)
-      << Slurp(kTmp / "bad5.log");
-  EXPECT_EQ(RunEma("diagnose \"" + (kTmp / "nominal.toml").string() + "\" --test stud-7um=\"" + modes.string() + "\"",
+  const fs::path modes = kChainTmp / "nominal-modes.unv";
+  ASSERT_EQ(RunEma("model \"" + (kChainTmp / "nominal.toml").string() + "\" -o \"" + modes.string() + "\"", "bad5.log"), 0)
+      << Slurp(kChainTmp / "bad5.log");
+  EXPECT_EQ(RunEma("diagnose \"" + (kChainTmp / "nominal.toml").string() + "\" --test stud-7um=\"" + modes.string() + "\"",
                 "bad6.log"),
             1);
-  EXPECT_NE(Slurp(kTmp / "bad6.log").find("stud-7um"), std::string::npos);
+  EXPECT_NE(Slurp(kChainTmp / "bad6.log").find("stud-7um"), std::string::npos);
   // Correlate against itself through the CLI: JSON per cli.md.
-  const fs::path corr = kTmp / "self.json";
-  ASSERT_EQ(RunEma("correlate \"" + modes.string() + "\" \"" + (kTmp / "nominal.toml").string() + "\" --json \"" +
-                    corr.string() + "\" --table \"" + (kTmp / "self.csv").string() + "\"",
+  const fs::path corr = kChainTmp / "self.json";
+  ASSERT_EQ(RunEma("correlate \"" + modes.string() + "\" \"" + (kChainTmp / "nominal.toml").string() + "\" --json \"" +
+                    corr.string() + "\" --table \"" + (kChainTmp / "self.csv").string() + "\"",
                 "self.log"),
             0)
-      << Slurp(kTmp / "self.log");
+      << Slurp(kChainTmp / "self.log");
   const json c = json::parse(Slurp(corr));
   EXPECT_EQ(c["pairs"].size(), 12u);
   EXPECT_NEAR(c["summary"]["mean_agreement_pct"].get<double>(), 100.0, 1e-6);
