@@ -27,6 +27,8 @@
 #include <thread>
 #include <vector>
 
+#include "test_files.hpp"
+
 namespace ema::test {
 
 struct BrowserResult {
@@ -39,13 +41,6 @@ struct BrowserResult {
   int exported_svg = -1;       ///< data-export-svg (page opened with #export-check)
   int exported_png = -1;       ///< data-export-png
 };
-
-inline std::string ReadWhole(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 /// `fragment` (e.g. "#export-check") is appended to the page's URL.
 inline BrowserResult CheckInChromium(const std::filesystem::path& html, const std::filesystem::path& work_dir,
@@ -62,7 +57,7 @@ inline BrowserResult CheckInChromium(const std::filesystem::path& html, const st
       "' --dump-dom 'file://" + std::filesystem::absolute(html).string() + fragment + "' > '" + dom.string() + "' 2> '" +
       log.string() + "'";
   if (std::system(command.c_str()) != 0) return result;
-  const std::string text = ReadWhole(dom);
+  const std::string text = Slurp(dom);
   result.ran = text.find("<body") != std::string::npos;
   std::smatch m;
   if (std::regex_search(text, m, std::regex("data-charts-expected=\"([0-9]+)\""))) result.expected = std::stoi(m[1]);
@@ -73,7 +68,7 @@ inline BrowserResult CheckInChromium(const std::filesystem::path& html, const st
   // A rendered plotly chart holds an <svg class="main-svg"> (2D and 3D alike).
   for (size_t at = text.find("data-rendered=\"1\""); at != std::string::npos; at = text.find("data-rendered=\"1\"", at + 1))
     ++result.rendered_divs;
-  std::istringstream lines(ReadWhole(log));
+  std::istringstream lines(Slurp(log));
   for (std::string line; std::getline(lines, line);) {
     const bool console = line.find(":CONSOLE") != std::string::npos;
     if ((console && (line.find("ERROR") != std::string::npos || line.find("Error") != std::string::npos)) ||

@@ -105,7 +105,7 @@ TEST(ReportQuality, RendersExportsEveryChartAndPrintsToPdf) {
   // Every chart exported as SVG holding its title and as a PNG.
   EXPECT_EQ(r.exported_svg, r.expected);
   EXPECT_EQ(r.exported_png, r.expected);
-  const std::string dom = test::ReadWhole(dir / "browser" / "dom.html");
+  const std::string dom = test::Slurp(dir / "browser" / "dom.html");
   EXPECT_NE(dom.find("Data quality — quality"), std::string::npos);
   EXPECT_NE(dom.find("Download SVG (with title)"), std::string::npos);  // the modebar buttons
   EXPECT_NE(dom.find("Download PNG (with title)"), std::string::npos);
@@ -119,8 +119,8 @@ TEST(ReportQuality, RendersExportsEveryChartAndPrintsToPdf) {
       "--no-pdf-header-footer --user-data-dir='" + (dir / "profile-pdf").string() + "' --print-to-pdf='" +
       pdf.string() + "' 'file://" + fs::absolute(dir / "report.html").string() + "' > '" +
       (dir / "pdf.log").string() + "' 2>&1";
-  ASSERT_EQ(std::system(command.c_str()), 0) << test::ReadWhole(dir / "pdf.log");
-  const std::string bytes = test::ReadWhole(pdf);
+  ASSERT_EQ(std::system(command.c_str()), 0) << test::Slurp(dir / "pdf.log");
+  const std::string bytes = test::Slurp(pdf);
   ASSERT_EQ(bytes.rfind("%PDF-", 0), 0u);
   int pages = 0;
   for (size_t at = bytes.find("/Type /Page"); at != std::string::npos; at = bytes.find("/Type /Page", at + 1))

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "diagnose/article_models.hpp"
+#include "test_files.hpp"
 
 namespace ema::test_chain {
 
@@ -32,12 +33,7 @@ inline int RunEma(const fs::path& dir, const std::string& args, const std::strin
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-inline std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using ema::test::Slurp;
 
 /// A hammer plan: references, sensor sets (each a list of DOFs), 3 impacts each, 0.2 % force and
 /// 0.5 % response noise, no sensor mass.
