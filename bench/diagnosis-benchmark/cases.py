@@ -505,9 +505,10 @@ def draw_parameter(rng, kind, target, m, mean_k, fe_mass):
     raise ValueError(kind)
 
 
-def make_case(index, seed):
-    """The case: files to write (relative path -> text), the truth and the test plans."""
-    rng = random.Random(f"diagnosis-benchmark:{seed}:{index}")
+def make_case(index, seed, attempt=0):
+    """The case: files to write (relative path -> text), the truth and the test plans. `attempt` > 0
+    draws the case again (bench.py redraws a case whose hidden effect the test cannot see)."""
+    rng = random.Random(f"diagnosis-benchmark:{seed}:{index}" + (f":{attempt}" if attempt else ""))
     family = FAMILIES[index % len(FAMILIES)]
     noise = NOISE_LEVELS[(index // len(FAMILIES)) % 3]
     n_effects = EFFECT_COUNTS[(index // (3 * len(FAMILIES))) % 5]
@@ -567,7 +568,8 @@ def make_case(index, seed):
     # simulate adds the plan's sensor masses itself: its model has no sensor [[mass]].
     files["simulate.toml"] = m.text() + "\n" + "".join(blocks)
     files["plan.toml"] = plan["text"]
-    return {"index": index, "seed": seed, "family": family, "noise": noise, "truth": truth, "setups": setups,
+    return {"index": index, "seed": seed, "attempt": attempt, "family": family, "noise": noise, "truth": truth, "setups": setups,
+            "effect_blocks": blocks,
             "sensor_mass": plan["sensor_mass"], "sensor_points": plan["sensor_points"],
             "references": plan["references"], "files": files}
 
@@ -621,7 +623,7 @@ def draw_plan(rng, family, m, noise, seed, index):
     impacts = rng.choice((3, 4, 5))
     lines = ["[plan]", "references = [" + ", ".join(f'"{r}"' for r in references) + "]",
              "sample_rate_hz = {fs}", "samples = {samples}", f"impacts = {impacts}", "force_peak_n = 100.0",
-             "pulse_duration_s = 0.3e-3", f"force_noise = {fmt(noise / 2)}", f"response_noise = {fmt(noise)}",
+             "pulse_duration_s = {pulse}", f"force_noise = {fmt(noise / 2)}", f"response_noise = {fmt(noise)}",
              f"sensor_mass = {fmt(sensor_mass)}", "seed = {plan_seed}", ""]
     for i, s in enumerate(sets, start=1):
         lines += ["[[set]]", f'name = "set {i}"', "sensors = [" + ", ".join(f'"{d}"' for d in s) + "]", ""]

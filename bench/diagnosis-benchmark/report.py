@@ -118,7 +118,7 @@ def tables(rows):
     lines.append(HEADER)
     lines.append(rate_row("all", rows))
     low = [r for r in rows if r["noise"] <= 0.02]
-    lines.append(rate_row("noise 0.5–2 % (the goal: ≥ 95 % right)", low))
+    lines.append(rate_row("noise 0.5–2 % (the goal: ≥ 97 % right)", low))
     nones = [r for r in rows if r["n_effects"] == 0]
     spurious = sum(1 for r in nones if not r["right"])
     lines.append("")
@@ -187,6 +187,15 @@ def tables(rows):
                            f"{p['fitted']:.4g}" if p["fitted"] else f"{p['effect']} {p['name']}: no value"
                            for p in r["parameters"])
             lines.append(f"| {r['index']} | {r['family']} | {100 * r['noise']:.1f} % | {fmt_truth(r)} | {ps} |")
+    aside = [(r, a) for r in rows for a in r.get("set_aside", [])]
+    if aside:
+        lines.append(f"\nDraws set aside as invisible ({len(aside)}; the case was drawn again): a hidden effect that "
+                     "alone moves no mode of the test band by 0.5 % (five times the diagnosis' frequency floor)\n")
+        lines.append("| case | attempt | family | truth drawn | largest shift per effect [%] |")
+        lines.append("|---|---|---|---|---|")
+        for r, a in aside:
+            lines.append(f"| {r['index']} | {a['attempt']} | {r['family']} | {' + '.join(a['truth'])} | "
+                         + ", ".join(f"{x:.2f}" for x in a["max_shift_pct"]) + " |")
     timed = [r for r in rows if "seconds" in r]
     if timed:
         tot = sorted(r["seconds"]["total"] for r in timed)

@@ -97,26 +97,54 @@ double ParamSpec::Value(double theta) const { return log ? ref * std::exp(theta)
 double ParamSpec::Derivative(double theta) const { return log ? ref * std::exp(theta) : scale; }
 double ParamSpec::Theta(double value) const { return log ? std::log(value / ref) : (value - ref) / scale; }
 
+namespace {
+constexpr double kLogSqrt2Pi = 0.91893853320467274;
+
+// log of (1 − ε)·N(d; 0, σ²) + ε·N(d; 0, σ_t²), and the core's share of it at d.
+std::pair<double, double> MixtureLogDensity(double d, double sigma, double share, double tail_sigma) {
+  const double core = std::log1p(-share) - 0.5 * (d / sigma) * (d / sigma) - std::log(sigma) - kLogSqrt2Pi;
+  if (!(share > 0.0)) return {core, 1.0};
+  const double tail = std::log(share) - 0.5 * (d / tail_sigma) * (d / tail_sigma) - std::log(tail_sigma) - kLogSqrt2Pi;
+  const double top = std::max(core, tail);
+  const double total = top + std::log(std::exp(core - top) + std::exp(tail - top));
+  return {total, std::exp(core - total)};
+}
+}  // namespace
+
 double Prior::LogDensity(double theta, const ParamSpec& spec) const {
-  constexpr double kLogSqrt2Pi = 0.91893853320467274;
-  if (shape == model::PriorShape::kLogNormal) {
-    const double z = (theta - centre) / sigma;
-    return -0.5 * z * z - std::log(sigma) - kLogSqrt2Pi;
-  }
+  if (shape == model::PriorShape::kLogNormal) return MixtureLogDensity(theta - centre, sigma, tail_share, tail_sigma).first;
   const double v = spec.Value(theta);
   return std::log(2.0) - 0.5 * (v / sigma) * (v / sigma) - std::log(sigma) - kLogSqrt2Pi +
          std::log(std::abs(spec.Derivative(theta)));
 }
 
 double Prior::Curvature(double theta, const ParamSpec& spec) const {
-  if (shape == model::PriorShape::kLogNormal) return 1.0 / (sigma * sigma);
+  if (shape == model::PriorShape::kLogNormal) {
+    if (!(tail_share > 0.0)) return 1.0 / (sigma * sigma);
+    // −d²/dθ² of the mixture's log: w/σ² + (1−w)/σ_t² − w(1−w)(d/σ² − d/σ_t²)², w the core's
+    // share at d. Between the two components it is negative, and a Laplace evidence taken there
+    // with a Hessian the data leave flat in some direction is unbounded (a spurious third member
+    // at "99.9 %", benchmark case 159): it is floored at the tail's own 1/σ_t², the evidence of
+    // the tail component alone, which never counts more than the tail's share ε of the prior.
+    const double d = theta - centre;
+    const double w = MixtureLogDensity(d, sigma, tail_share, tail_sigma).second;
+    const double a = 1.0 / (sigma * sigma), b = 1.0 / (tail_sigma * tail_sigma);
+    return std::max(b, w * a + (1.0 - w) * b - w * (1.0 - w) * (d * a - d * b) * (d * a - d * b));
+  }
   const double v = spec.Value(theta);
   // −d²/dθ² of −½ v²/σ² (+ θ, the log Jacobian): 2v²/σ² for v = ref·e^θ, scale²/σ² for linear.
   return spec.log ? 2.0 * v * v / (sigma * sigma) : spec.scale * spec.scale / (sigma * sigma);
 }
 
 double Prior::Residual(double theta, const ParamSpec& spec) const {
-  if (shape == model::PriorShape::kLogNormal) return (theta - centre) / sigma;
+  if (shape == model::PriorShape::kLogNormal) {
+    if (!(tail_share > 0.0)) return (theta - centre) / sigma;
+    // ½ r² = log p(centre) − log p(θ): the MAP fit minimises the same objective.
+    const double d = theta - centre;
+    const double drop = MixtureLogDensity(0.0, sigma, tail_share, tail_sigma).first -
+                        MixtureLogDensity(d, sigma, tail_share, tail_sigma).first;
+    return std::copysign(std::sqrt(2.0 * std::max(0.0, drop)), d);
+  }
   return spec.Value(theta) / sigma;
 }
 
@@ -281,6 +309,13 @@ std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& op
   for (const auto& b : base.bodies) atoms.push_back(MakeAtom(base, EffectKind::kMassScale, b.name, 1.0, b.uncertainty));
   for (const auto& b : base.bodies)
     atoms.push_back(MakeAtom(base, EffectKind::kGroundSpring, b.name, 0.1 * k_mean_all, kNaN));
+  // Stiffnesses fail grossly (a loose bolt, a cracked weld, rubber for a rated mount); masses are
+  // weighed. Only stiffness factors carry the fault tail.
+  for (Atom& a : atoms)
+    if (a.info->kind == EffectKind::kStiffnessScale) {
+      a.prior.tail_share = options.stiffness_fault_share;
+      a.prior.tail_sigma = options.stiffness_fault_sigma;
+    }
   return atoms;
 }
 

@@ -42,6 +42,12 @@ struct Prior {
   double centre = 0.0;  ///< θ of the prior's centre (log-normal) or unused (half-normal)
   double sigma = 1.0;   ///< 1σ in θ (log-normal) or in value (half-normal)
   double relative_sigma = 1.0;  ///< as documented (relative), for reports
+  /// Log-normal only: a share `tail_share` of the prior is a broad "fault" component
+  /// N(centre, tail_sigma²) — the item is as stated within its uncertainty, or grossly off (a
+  /// loose bolt, a cracked weld): a reading far outside is then weighed by the data, not by how far
+  /// into a Gaussian tail it lies (docs/diagnose.md "Priors"). 0: the plain log-normal.
+  double tail_share = 0.0;
+  double tail_sigma = 3.0;
 
   /// log prior density of θ (including the Jacobian of the log parameterisation).
   double LogDensity(double theta, const ParamSpec& spec) const;
@@ -232,6 +238,16 @@ struct SearchResult {
 
 /// Screening, fits of the promising singles and forward/backward combinations.
 SearchResult Search(Problem* problem, const DiagnoseOptions& options);
+
+/// Best point of `candidate` added to `base_set` (θ of the base held): a coarse grid over its
+/// range, then golden-section steps between the best point's neighbours. Returns (objective, θ).
+std::pair<double, double> Screen(Problem* p, const std::vector<int>& base_set, const std::vector<double>& base_theta,
+                                 int candidate, int points);
+
+/// Effects the data may confuse with each other: any kind on the same spring or part group (or
+/// its members), the same kind on any FE part, any mass effect for a mass effect, else the same
+/// kind (search.cpp "Swap").
+bool LookAlike(const Atom& a, const Atom& b);
 
 /// Fits a given set from the θ of its fitted subsets (used for the "error falls" steps).
 Fit FitSubset(Problem* problem, const std::vector<Fit>& known, const std::vector<int>& set, const DiagnoseOptions& options);

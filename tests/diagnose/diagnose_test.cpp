@@ -415,6 +415,8 @@ TEST(Diagnose, MemberFitsGoToThePlausibleMembers) {
   // the evidence will: one of the other three mounts gets the fit (no other kind on a member can
   // stiffen a mount) and MB, implausible at any factor that explains the data, gets none.
   // Ranked by misfit alone, MB (exact) would take the only fit and no plausible member be tried.
+  // The plain log-normal prior (no fault tail): the engineer's 0.1 % is taken at its word here;
+  // with the default tail MB is the answer, flagged (next test).
   Model nominal = Guideway();
   for (Spring& s : nominal.springs) {
     if (s.group != "mounts") continue;
@@ -428,6 +430,7 @@ TEST(Diagnose, MemberFitsGoToThePlausibleMembers) {
   DiagnoseOptions options;
   options.max_effects = 1;
   options.max_fitted_singles = 1;
+  options.stiffness_fault_share = 0.0;
   const Diagnosis d = Diagnose(nominal, tests, options);
   int fitted_mounts = 0;
   for (const Candidate& c : d.candidates) {
@@ -436,6 +439,45 @@ TEST(Diagnose, MemberFitsGoToThePlausibleMembers) {
     EXPECT_NE(c.target, "mounts/MB") << d.explanation;
   }
   EXPECT_EQ(fitted_mounts, 1) << d.explanation;
+}
+
+TEST(Diagnose, AStiffnessFarOutsideItsStatedUncertaintyIsFoundAndFlagged) {
+  // The same mount MB, 1.3× stiffer than a rating the engineer gives to 0.1 % (262 σ of it).
+  // Priors, not cliffs: a stiffness is as stated within its uncertainty or grossly off (the fault
+  // tail, 2 % of the prior, σ = 3 in ln factor), so the only reading that fits is rank 1 with its
+  // value, and flagged in words. With the plain log-normal (share 0) its prior cost, 3.4e4, buries
+  // it under readings that leave the error unexplained.
+  Model nominal = Guideway();
+  for (Spring& s : nominal.springs) {
+    if (s.group != "mounts") continue;
+    const double x = s.a.at.x(), y = s.a.at.y();
+    s.member = x < 0 ? (y > 0 ? "MB" : "MA") : (y > 0 ? "MD" : "MC");
+    if (s.member == "MB") s.uncertainty = 0.001;
+  }
+  const Model truth = model::ApplyEffect(nominal, Make("stiffness_scale", "mounts/MB", "factor", 1.3));
+  const std::vector<SetupModes> tests = {{"stud-5um", NoisyTest(truth, "stud-5um", 31)},
+                                         {"stud-9um", NoisyTest(truth, "stud-9um", 32)}};
+  DiagnoseOptions options;
+  options.max_effects = 1;
+  for (double share : {0.02, 0.0}) {
+    options.stiffness_fault_share = share;
+    const Diagnosis d = Diagnose(nominal, tests, options);
+    ASSERT_FALSE(d.candidates.empty());
+    const Candidate& first = d.candidates.front();
+    if (share > 0.0) {
+      ASSERT_EQ(first.target, "mounts/MB") << d.explanation;
+      EXPECT_EQ(first.kind, "stiffness_scale") << d.explanation;
+      ASSERT_EQ(first.parameters.size(), 1u);
+      // 0.1 % frequency noise on two setups: the factor to 1 %.
+      EXPECT_NEAR(first.parameters.front().value, 1.3, 0.013) << d.explanation;
+      EXPECT_TRUE(first.parameters.front().outside_prior) << d.explanation;
+      EXPECT_GT(first.probability, 0.9) << d.explanation;
+      ASSERT_FALSE(first.flags.empty()) << d.explanation;
+      EXPECT_NE(first.flags.front().find("check it"), std::string::npos) << first.flags.front();
+    } else {
+      EXPECT_NE(first.target, "mounts/MB") << "without the tail the prior buries the truth: " << d.explanation;
+    }
+  }
 }
 
 TEST(EffectProbabilities, SumOverTheCandidatesThatHoldEachEffect) {

@@ -5,12 +5,18 @@
 #include <fstream>
 #include <string>
 
+#include <unistd.h>
+
 #include "ema/model/model.hpp"
 
 namespace ema::model::testing {
 
+// One folder per test process: ctest runs each test of a fixture as its own process, two at once,
+// and a folder shared by name let one test's SetUp rewrite the files another was reading (a
+// flaky PartBadInput.NameClashWithASpringGroupOrABody).
 inline std::filesystem::path TempDir(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::path(EMA_TEST_TMP_DIR) / "model" / name;
+  const std::filesystem::path dir =
+      std::filesystem::path(EMA_TEST_TMP_DIR) / "model" / (name + "-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   return dir;
 }

@@ -67,6 +67,14 @@ struct DiagnoseOptions {
   /// few test DOFs cannot tell apart on their nearest partner.
   correlation::PairingOptions pairing{0.5, 0.05, 1.0};
   correlation::DofMatchOptions dofs;
+  /// The prior of a stiffness factor: ln(factor) ~ (1 − ε)·N(0, σ²) + ε·N(0, σ_f²), σ the stated
+  /// uncertainty, ε = stiffness_fault_share, σ_f = stiffness_fault_sigma. A joint or part is as
+  /// stated within its uncertainty, or (ε) grossly off — loose, cracked, rubber for steel — anywhere
+  /// within about ×/÷ e^(2σ_f). Without the tail a reading 6× softer than stated pays e^(−z²/2) and
+  /// loses to a look-alike reading that is only 5× softer, whatever the data say
+  /// (docs/diagnose.md "Priors"). 0: the plain log-normal.
+  double stiffness_fault_share = 0.02;
+  double stiffness_fault_sigma = 3.0;
   /// Members of groups (one joint, pad, mount) and single points are candidates too.
   bool members = true;
   /// Screening: grid points of the scan over one parameter's (log) range.
@@ -82,6 +90,11 @@ struct DiagnoseOptions {
   /// Swap move after the combinations: each effect of the best set of each size replaced by its
   /// look-alikes (docs/diagnose.md), re-fitted and checked backward.
   bool swaps = true;
+  /// Cross-start after the swap: every fitted set sharing an effect with one of the
+  /// `cross_starts` best fits is re-fitted from that fit's values of the shared effects when that
+  /// start is better than its own optimum (a set fitted early from a screened start can sit in a
+  /// local minimum far from the values a better fit found). 0: off.
+  int cross_starts = 3;
   int max_iterations = 30;
   /// Models with at least this many DOFs (FE-sized) are screened and fitted through reduced
   /// models (model/reduced.hpp: the nominal modes and each candidate's mode-shape sensitivity), the
@@ -89,6 +102,10 @@ struct DiagnoseOptions {
   /// solves. 0: always full solves.
   int reduced_model_min_dofs = 200;
   int exact_candidates = 8;
+  /// FE-sized models: after that, the best fit has each effect swapped for each look-alike of the
+  /// same kind at the same value, and the `polish_swaps` best of those starts (full solves) are
+  /// re-fitted around them (docs/diagnose.md "Reduced models"). 0: off.
+  int polish_swaps = 3;
   ProgressCallback progress;
 
   /// True when every option is in range; else false with the reason in *error (Ceres style).
