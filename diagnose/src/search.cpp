@@ -18,16 +18,9 @@
 // single point, the other body's mass) plus a third effect patching the difference is never
 // turned into the true pair. The best set of each size ≥ 2 therefore has each effect replaced in
 // turn by its look-alikes (any kind on the same spring group or its members; the same kind on any
-// FE part; any mass effect for a mass effect; the same kind on another body), screened with the rest held, the best
-// `additions` / 2 re-fitted and checked backward. Found by the diagnosis benchmark
-// (docs/diagnosis-benchmark.md).
-//
-// Cross-start: a set is fitted once, from the start its first route gave it (a screened value, a
-// smaller set's optimum). On an FE model a part factor of 0.15 and a point mass can meet in a
-// local minimum with the factor at 0.9 and the mass doing the work, while a better set found the
-// factor at 0.18 (benchmark case 51: the true pair ranked 34th at cost 1093 from the wrong start,
-// first at cost ~1 from the right one). Every fitted set sharing an effect with one of the best
-// fits is therefore tried again from that fit's values; the cache re-fits only a better start.
+// FE part; any mass effect for a mass effect; the same kind on another body), screened with the
+// rest held, the best `additions` / 2 re-fitted and checked backward. Found by the diagnosis
+// benchmark (docs/diagnosis-benchmark.md).
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -309,36 +302,6 @@ SearchResult Search(Problem* p, const DiagnoseOptions& options) {
         const Fit swapped = fit(set, theta);
         if (swapped.ok) fit_each_without_one(swapped);
       }
-    }
-  }
-  // Cross-start (see the top of the file): every fitted set that shares an effect with one of the
-  // best fits is tried once more from the best fit's values of the shared effects; `fit` re-fits
-  // it only when that start is already better than its own optimum.
-  std::vector<Fit> leaders;
-  {
-    std::vector<const Fit*> ranked;
-    for (const auto& [set, f] : fitted)
-      if (f.ok && !set.empty()) ranked.push_back(&f);
-    std::sort(ranked.begin(), ranked.end(), [](const Fit* a, const Fit* b) { return a->score < b->score; });
-    for (size_t i = 0; i < ranked.size() && static_cast<int>(i) < options.cross_starts; ++i) leaders.push_back(*ranked[i]);
-  }
-  for (const Fit& leader : leaders) {
-    std::vector<std::pair<std::vector<int>, std::vector<double>>> starts;
-    for (const auto& [set, f] : fitted) {
-      if (!f.ok || set == leader.atoms || set.size() < 2) continue;
-      std::vector<double> theta = f.theta;
-      bool shared = false;
-      for (size_t i = 0; i < set.size(); ++i)
-        for (size_t j = 0; j < leader.atoms.size(); ++j)
-          if (set[i] == leader.atoms[j] && std::abs(theta[i] - leader.theta[j]) > 0.05) {
-            theta[i] = leader.theta[j];
-            shared = true;
-          }
-      if (shared) starts.emplace_back(set, std::move(theta));
-    }
-    for (const auto& [set, theta] : starts) {
-      progress("re-fitting from the best values");
-      fit(set, theta);
     }
   }
   for (auto& [set, f] : fitted) result.fits.push_back(std::move(f));

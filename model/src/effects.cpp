@@ -239,7 +239,7 @@ const std::vector<EffectKindInfo>& EffectKindTable() {
        PriorShape::kLogNormal, 1.5, "1σ of ln(k / the target's mean stiffness)",
        "a mount, joint or adhesive layer in series with the interface", ApplySeriesCompliance},
       {EffectKind::kStiffnessScale, "stiffness_scale", "factor", EffectTarget::kSprings, true, 1e-3, 1e3, 0,
-       PriorShape::kLogNormal, 0.5, "1σ of ln(factor); a spring's `uncertainty` overrides it",
+       PriorShape::kLogNormal, 0.5, "1σ of ln(factor); a spring's or part's `uncertainty` overrides it; beyond it a 2 % fault tail (1σ 3 in ln) keeps a part or joint grossly off in play",
        "the interface stiffness itself is mis-estimated", ApplyStiffnessScale},
       {EffectKind::kOperatingPoint, "operating_point", "value", EffectTarget::kSprings, true, 0.05, 20.0, 0,
        PriorShape::kLogNormal, 0.5, "1σ of ln(value / nominal value)",

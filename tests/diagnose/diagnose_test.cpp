@@ -407,6 +407,20 @@ TEST(Diagnose, PriorPullsTheFitTowardsTheModel) {
   EXPECT_NEAR(f_tight, expected, 0.25 * (f_loose - expected)) << "σ_d " << sigma_data << ", loose " << f_loose;
 }
 
+// The guideway with its four mounts as members MA..MD, MB's springs rated to 0.1 %
+// (uncertainty 0.001), and both setups' noisy test modes of MB really 1.3× stiffer.
+std::pair<Model, std::vector<SetupModes>> MountMBStifferThanItsRating() {
+  Model nominal = Guideway();
+  for (Spring& s : nominal.springs) {
+    if (s.group != "mounts") continue;
+    const double x = s.a.at.x(), y = s.a.at.y();
+    s.member = x < 0 ? (y > 0 ? "MB" : "MA") : (y > 0 ? "MD" : "MC");
+    if (s.member == "MB") s.uncertainty = 0.001;
+  }
+  const Model truth = model::ApplyEffect(nominal, Make("stiffness_scale", "mounts/MB", "factor", 1.3));
+  return {nominal, {{"stud-5um", NoisyTest(truth, "stud-5um", 31)}, {"stud-9um", NoisyTest(truth, "stud-9um", 32)}}};
+}
+
 TEST(Diagnose, MemberFitsGoToThePlausibleMembers) {
   // Mount "MB" (the base's mount at x = −0.1, y = +0.08) really is 1.3 times stiffer, but the
   // engineer declares its springs known to 0.1 % (uncertainty 0.001: ln 1.3 = 262 σ, a prior
@@ -417,16 +431,7 @@ TEST(Diagnose, MemberFitsGoToThePlausibleMembers) {
   // Ranked by misfit alone, MB (exact) would take the only fit and no plausible member be tried.
   // The plain log-normal prior (no fault tail): the engineer's 0.1 % is taken at its word here;
   // with the default tail MB is the answer, flagged (next test).
-  Model nominal = Guideway();
-  for (Spring& s : nominal.springs) {
-    if (s.group != "mounts") continue;
-    const double x = s.a.at.x(), y = s.a.at.y();
-    s.member = x < 0 ? (y > 0 ? "MB" : "MA") : (y > 0 ? "MD" : "MC");
-    if (s.member == "MB") s.uncertainty = 0.001;
-  }
-  const Model truth = model::ApplyEffect(nominal, Make("stiffness_scale", "mounts/MB", "factor", 1.3));
-  const std::vector<SetupModes> tests = {{"stud-5um", NoisyTest(truth, "stud-5um", 31)},
-                                         {"stud-9um", NoisyTest(truth, "stud-9um", 32)}};
+  const auto [nominal, tests] = MountMBStifferThanItsRating();
   DiagnoseOptions options;
   options.max_effects = 1;
   options.max_fitted_singles = 1;
@@ -447,16 +452,7 @@ TEST(Diagnose, AStiffnessFarOutsideItsStatedUncertaintyIsFoundAndFlagged) {
   // tail, 2 % of the prior, σ = 3 in ln factor), so the only reading that fits is rank 1 with its
   // value, and flagged in words. With the plain log-normal (share 0) its prior cost, 3.4e4, buries
   // it under readings that leave the error unexplained.
-  Model nominal = Guideway();
-  for (Spring& s : nominal.springs) {
-    if (s.group != "mounts") continue;
-    const double x = s.a.at.x(), y = s.a.at.y();
-    s.member = x < 0 ? (y > 0 ? "MB" : "MA") : (y > 0 ? "MD" : "MC");
-    if (s.member == "MB") s.uncertainty = 0.001;
-  }
-  const Model truth = model::ApplyEffect(nominal, Make("stiffness_scale", "mounts/MB", "factor", 1.3));
-  const std::vector<SetupModes> tests = {{"stud-5um", NoisyTest(truth, "stud-5um", 31)},
-                                         {"stud-9um", NoisyTest(truth, "stud-9um", 32)}};
+  const auto [nominal, tests] = MountMBStifferThanItsRating();
   DiagnoseOptions options;
   options.max_effects = 1;
   for (double share : {0.02, 0.0}) {

@@ -90,11 +90,6 @@ struct DiagnoseOptions {
   /// Swap move after the combinations: each effect of the best set of each size replaced by its
   /// look-alikes (docs/diagnose.md), re-fitted and checked backward.
   bool swaps = true;
-  /// Cross-start after the swap: every fitted set sharing an effect with one of the
-  /// `cross_starts` best fits is re-fitted from that fit's values of the shared effects when that
-  /// start is better than its own optimum (a set fitted early from a screened start can sit in a
-  /// local minimum far from the values a better fit found). 0: off.
-  int cross_starts = 3;
   int max_iterations = 30;
   /// Models with at least this many DOFs (FE-sized) are screened and fitted through reduced
   /// models (model/reduced.hpp: the nominal modes and each candidate's mode-shape sensitivity), the
@@ -102,9 +97,9 @@ struct DiagnoseOptions {
   /// solves. 0: always full solves.
   int reduced_model_min_dofs = 200;
   int exact_candidates = 8;
-  /// FE-sized models: after that, the best fit has each effect swapped for each look-alike of the
-  /// same kind at the same value, and the `polish_swaps` best of those starts (full solves) are
-  /// re-fitted around them (docs/diagnose.md "Reduced models"). 0: off.
+  /// FE-sized models: after that, the best fit of each size ≥ 2 has each effect swapped for each
+  /// look-alike of the same kind (screened for its own value), and the `polish_swaps` best of those
+  /// starts by full solves are re-fitted around them (docs/diagnose.md "FE-sized models"). 0: off.
   int polish_swaps = 3;
   ProgressCallback progress;
 
