@@ -180,20 +180,14 @@ void PolishSwaps(detail::Problem* p, std::vector<detail::Fit>* fits, const Diagn
         if (std::find(leader.atoms.begin(), leader.atoms.end(), c) != leader.atoms.end()) continue;
         // The look-alike's own best value with the rest held (a factor on one cross-beam zone
         // must change twice as much as one on the deck that spans them all: benchmark case 43).
-        std::vector<int> rest;
-        std::vector<double> rest_theta;
-        for (size_t i = 0; i < leader.atoms.size(); ++i)
-          if (i != k) rest.push_back(leader.atoms[i]), rest_theta.push_back(leader.theta[i]);
+        const auto [rest, rest_theta] = detail::WithoutOne(leader, k);
         const auto [reduced, value] = detail::Screen(p, rest, rest_theta, c, std::max(5, options.scan_points - 2));
         if (!std::isfinite(reduced)) continue;
-        std::vector<std::pair<int, double>> pairs;
-        for (size_t i = 0; i < rest.size(); ++i) pairs.push_back({rest[i], rest_theta[i]});
-        pairs.push_back({c, value});
-        std::sort(pairs.begin(), pairs.end());
-        std::vector<int> set;
-        std::vector<double> theta;
-        for (const auto& [atom, t] : pairs) set.push_back(atom), theta.push_back(t);
-        starts.push_back({reduced, {set, theta}});
+        std::vector<int> set = rest;
+        std::vector<double> theta = rest_theta;
+        set.push_back(c);
+        theta.push_back(value);
+        starts.push_back({reduced, detail::Sorted(set, theta)});
       }
     }
     auto by_objective = [](const Start& x, const Start& y) { return x.first < y.first; };

@@ -239,6 +239,12 @@ struct SearchResult {
 /// Screening, fits of the promising singles and forward/backward combinations.
 SearchResult Search(Problem* problem, const DiagnoseOptions& options);
 
+/// A set in canonical (sorted) order with its θ.
+std::pair<std::vector<int>, std::vector<double>> Sorted(const std::vector<int>& set, const std::vector<double>& theta);
+
+/// A fitted set without its k-th effect, the others' fitted parameters as the start.
+std::pair<std::vector<int>, std::vector<double>> WithoutOne(const Fit& f, size_t k);
+
 /// Best point of `candidate` added to `base_set` (θ of the base held): a coarse grid over its
 /// range, then golden-section steps between the best point's neighbours. Returns (objective, θ).
 std::pair<double, double> Screen(Problem* p, const std::vector<int>& base_set, const std::vector<double>& base_theta,

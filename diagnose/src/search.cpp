@@ -61,7 +61,8 @@ std::vector<double> Grid(const ParamSpec& s, int points) {
   return g;
 }
 
-// A set in canonical (sorted) order with its θ.
+}  // namespace
+
 std::pair<std::vector<int>, std::vector<double>> Sorted(const std::vector<int>& set, const std::vector<double>& theta) {
   std::vector<size_t> order(set.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -74,7 +75,6 @@ std::pair<std::vector<int>, std::vector<double>> Sorted(const std::vector<int>& 
   return out;
 }
 
-// A fitted set without its k-th effect, the others' fitted parameters as the start.
 std::pair<std::vector<int>, std::vector<double>> WithoutOne(const Fit& f, size_t k) {
   std::pair<std::vector<int>, std::vector<double>> out;
   for (size_t i = 0; i < f.atoms.size(); ++i)
@@ -84,8 +84,6 @@ std::pair<std::vector<int>, std::vector<double>> WithoutOne(const Fit& f, size_t
     }
   return out;
 }
-
-}  // namespace
 
 // Best point of `candidate` added to `base` (θ of base fixed): the best of a coarse grid, then
 // a golden-section search between its neighbours (the valley of a well-determined parameter is
