@@ -1,5 +1,5 @@
 # ctest fuzz/<FUZZ_TARGET>: seed a corpus from the project's samples, tests/badinput and
-# ../shared/data (small files only: big ones slow libFuzzer down), then run FUZZ_EXE for SECONDS
+# tests/data/real (small files only: big ones slow libFuzzer down), then run FUZZ_EXE for SECONDS
 # seconds. Multi-file seeds (a model with its curve and matrices, a project with its model and
 # data) are joined with the separator line of fuzz/fuzz_util.hpp.
 set(sep "\n--8<--\n")
@@ -35,10 +35,10 @@ function(read_or_empty var path)
 endfunction()
 
 if(FUZZ_TARGET STREQUAL "uff_reader")
-  file(GLOB_RECURSE seeds "${SHARED_DATA_DIR}/uff/*" "${SOURCE_DIR}/samples/uff/*.unv" "${bad}/*.unv")
+  file(GLOB_RECURSE seeds "${REAL_DATA_DIR}/uff/*" "${SOURCE_DIR}/samples/uff/*.unv" "${bad}/*.unv")
   add_seed_files(${seeds})
 elseif(FUZZ_TARGET STREQUAL "csv")
-  file(GLOB seeds "${bad}/*.csv" "${SOURCE_DIR}/samples/meas-point/*.txt" "${SHARED_DATA_DIR}/frf-meas-point/*.txt")
+  file(GLOB seeds "${bad}/*.csv" "${SOURCE_DIR}/samples/meas-point/*.txt" "${REAL_DATA_DIR}/frf-meas-point/*.txt")
   add_seed_files(${seeds})
   add_seed(impact_column "impact,time,force:3:+Z[N],acc:101:+X[m/s^2],acc:102:-Y[g]\n1,0,0.5,0.1,0\n1,0.001,1.5,-0.2,0.1\n2,0,0.25,0.3,0.2\n2,0.001,0.1,0.2,0.1\n")
   add_seed(complex_column "# re+imj\n(1+2j)\n3.5-0.25j\nnan\n-1e-3\n")

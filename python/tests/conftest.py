@@ -8,7 +8,7 @@ import pytest
 
 EMA = os.environ.get("EMA_EXECUTABLE", "ema")
 SOURCE = pathlib.Path(os.environ.get("EMA_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
-SHARED = pathlib.Path(os.environ.get("EMA_SHARED_DATA_DIR", SOURCE.parent / "shared" / "data"))
+SHARED = pathlib.Path(os.environ.get("EMA_REAL_DATA_DIR", SOURCE / "tests" / "data" / "real"))
 
 
 def run_ema(*args):

@@ -9,7 +9,7 @@
 5. `pip uninstall -y ema`: the package is gone.
 
 Usage: venv_install.py --source REPO --extension build/python/ema/_ema*.so --work build/python/venv-install
-(EMA_EXECUTABLE, EMA_SHARED_DATA_DIR, EMA_SOURCE_DIR as for python/pytest).
+(EMA_EXECUTABLE, EMA_REAL_DATA_DIR, EMA_SOURCE_DIR as for python/pytest).
 """
 import argparse
 import os
@@ -58,6 +58,10 @@ def main():
         expected = run([cli, "--version"], env=env).stdout.strip()
         if version != expected:
             sys.exit(f"venv_install.py: python -m ema --version says '{version}', ema --version '{expected}'")
+    # The package carries the project's licence (LICENSE, GPL-3.0-or-later) in its metadata.
+    meta = run([pip, "show", "ema"], cwd=elsewhere, env=env).stdout
+    if "License: GPL-3.0-or-later" not in meta:
+        sys.exit(f"venv_install.py: `pip show ema` does not name the licence GPL-3.0-or-later:\n{meta}")
     shown = run([python, "-c", "import ema; print(ema.__file__); help(ema.diagnose)"], cwd=elsewhere, env=env).stdout
     if not shown.startswith(str(venv)) or "diagnose(model" not in shown or "ema fit --json" not in shown:
         sys.exit("venv_install.py: help(ema.diagnose) from another folder did not show the installed package's docstring")

@@ -160,10 +160,10 @@ TEST(AmplitudeChain, MicroSlipJointSoftensAndDampsMoreAndTheLinearJointDoesNot) 
 }
 
 TEST(AmplitudeChain, RealHammerImpactsOfALinearArticleSplitByForceStayNone) {
-  // Real data (shared/data/hammer-pyfrf): five impacts of 69-89 N on one article, split into two
+  // Real data (tests/data/real/hammer-pyfrf): five impacts of 69-89 N on one article, split into two
   // force bins, fitted and compared: a linear structure over a 1.15x force range, so every mode
   // must come out `none` (the floors are meant for exactly this repeatability).
-  const fs::path data = fs::path(EMA_SHARED_DATA_DIR) / "hammer-pyfrf" / "hammer-5-impacts.unv";
+  const fs::path data = fs::path(EMA_REAL_DATA_DIR) / "hammer-pyfrf" / "hammer-5-impacts.unv";
   if (!fs::exists(data)) FAIL() << "shared data not found: " << data;
   const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / ("amplitude_real_" + std::to_string(::getpid()));
   fs::remove_all(dir);

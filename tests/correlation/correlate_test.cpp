@@ -236,7 +236,7 @@ TEST(Correlate, BadInput) {
 
 TEST(Correlate, Uff55FromAnotherToolAsModelModes) {
   // pyuff's uff55_translation.uff: 3 real modes (10, 12, 13 Hz) at nodes 1..4, X Y Z.
-  const ModeSet model = formats::ReadModeSet(std::string(EMA_SHARED_DATA_DIR) + "/uff/pyuff/uff55_translation.uff");
+  const ModeSet model = formats::ReadModeSet(std::string(EMA_REAL_DATA_DIR) + "/uff/pyuff/uff55_translation.uff");
   ASSERT_EQ(model.modes.size(), 3u);
   EXPECT_EQ(model.dofs.size(), 12u);
   EXPECT_NEAR(model.modes[0].frequency_hz, 10.0, 1e-9);

@@ -1,4 +1,4 @@
-// The measured free-free beam FRFs of ../shared/data/frf-meas-point (pyuff data, MIT): one
+// The measured free-free beam FRFs of tests/data/real/frf-meas-point (pyuff data, MIT): one
 // accelerometer at node 1 (+X), a roving hammer at nodes 1, 2, 3; 0..1000 Hz at 1 Hz.
 #include <gtest/gtest.h>
 
@@ -38,7 +38,7 @@ FrfSet MeasuredBeam() {
   set.outputs = {{1, 1}};
   for (int ref = 1; ref <= 3; ++ref) {
     set.references.push_back({ref, 1});
-    Eigen::VectorXcd col = ReadComplexColumn(std::string(EMA_SHARED_DATA_DIR) + "/frf-meas-point/meas_point_" +
+    Eigen::VectorXcd col = ReadComplexColumn(std::string(EMA_REAL_DATA_DIR) + "/frf-meas-point/meas_point_" +
                                              std::to_string(ref) + ".txt");
     set.h.push_back(col);
   }

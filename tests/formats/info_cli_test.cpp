@@ -16,7 +16,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path Data(const std::string& rel) { return fs::path(EMA_SHARED_DATA_DIR) / "uff" / rel; }
+fs::path Data(const std::string& rel) { return fs::path(EMA_REAL_DATA_DIR) / "uff" / rel; }
 
 struct CliRun {
   int code;

@@ -248,7 +248,7 @@ void ExpectMeasPointBeam(const FrfSet& s) {
   EXPECT_DOUBLE_EQ(s.h[2](1, 0).imag(), -0.0970558419720156);
 }
 
-TEST(FormatsIo, MeasPointFrfsAsPublishedWithoutIndex) { ExpectMeasPointBeam(ReadFrfSet(fs::path(EMA_SHARED_DATA_DIR) / "frf-meas-point")); }
+TEST(FormatsIo, MeasPointFrfsAsPublishedWithoutIndex) { ExpectMeasPointBeam(ReadFrfSet(fs::path(EMA_REAL_DATA_DIR) / "frf-meas-point")); }
 
 TEST(FormatsIo, MeasPointSampleThroughItsIndex) {
   ExpectMeasPointBeam(ReadFrfSet(fs::path(EMA_SOURCE_DIR) / "samples" / "meas-point"));

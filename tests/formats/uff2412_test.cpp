@@ -18,7 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path Data(const std::string& rel) { return fs::path(EMA_SHARED_DATA_DIR) / "uff" / rel; }
+fs::path Data(const std::string& rel) { return fs::path(EMA_REAL_DATA_DIR) / "uff" / rel; }
 
 fs::path WriteText(const std::string& name, const std::string& text) {
   fs::create_directories(EMA_TEST_TMP_DIR);

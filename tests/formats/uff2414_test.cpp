@@ -14,7 +14,7 @@ namespace ema::formats {
 namespace {
 
 namespace fs = std::filesystem;
-const fs::path kData = fs::path(EMA_SHARED_DATA_DIR) / "uff";
+const fs::path kData = fs::path(EMA_REAL_DATA_DIR) / "uff";
 
 int IndexOf(const ModeSet& set, Dof dof) {
   for (size_t i = 0; i < set.dofs.size(); ++i)

@@ -21,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path Data(const std::string& rel) { return fs::path(EMA_SHARED_DATA_DIR) / "uff" / rel; }
+fs::path Data(const std::string& rel) { return fs::path(EMA_REAL_DATA_DIR) / "uff" / rel; }
 fs::path Tmp(const std::string& name) {
   fs::create_directories(EMA_TEST_TMP_DIR);
   return fs::path(EMA_TEST_TMP_DIR) / name;

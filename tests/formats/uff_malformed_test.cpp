@@ -182,7 +182,7 @@ TEST(UffQuirks, DofInEntityName) {
   EXPECT_EQ(dir, -4);
   for (const char* no : {"NONE", "Mic 01", "", ".1.Q", "Root", "12"}) EXPECT_FALSE(DecodeEntityName(no, &node, &dir)) << no;
   // dataset58_FRF.unv writes node 0, direction 0 and the names ".1.Z-" / ".56.Z" (sed -n 8p).
-  const FrfSet s = ema::formats::ReadFrfSet(fs::path(EMA_SHARED_DATA_DIR) / "uff/ufffiles-jl/dataset58_FRF.unv");
+  const FrfSet s = ema::formats::ReadFrfSet(fs::path(EMA_REAL_DATA_DIR) / "uff/ufffiles-jl/dataset58_FRF.unv");
   ASSERT_EQ(s.OutputCount(), 1);
   EXPECT_EQ(s.outputs[0], (Dof{1, -3}));
   EXPECT_EQ(s.references[0], (Dof{56, 3}));
