@@ -78,7 +78,8 @@ json AmplitudeJson(const correlation::AmplitudeResult& r) {
                      {"target_level", m.points[static_cast<std::size_t>(m.target_point)].level},
                      {"reading", m.reading}});
   }
-  return {{"level_kind", correlation::LevelKindToString(r.level_kind)}, {"levels", r.levels}, {"modes", modes}};
+  // The readings are text: valid UTF-8 whatever bytes they hold (formats::ValidUtf8).
+  return formats::ValidUtf8({{"level_kind", correlation::LevelKindToString(r.level_kind)}, {"levels", r.levels}, {"modes", modes}});
 }
 
 

@@ -228,8 +228,11 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
       "test modes (UFF 55) of one setup, as SETUP=MODES.unv (or MODES.unv for the nominal model); repeat per setup")(
       "json", po::value(&config.json_path), "write the ranking as JSON (DIAG.json)")(
       "output,o", po::value(&config.output),
-      "write the model with the rank-1 effect(s) added as [[effect]] blocks; relative paths in it are rewritten so "
-      "that it loads from its own folder")(
+      "write the model with the rank-1 effect(s) added as [[effect]] blocks; the files it names are written "
+      "relative to its folder when they lie inside it, else absolute, so it loads wherever it is copied")(
+      "bundle", po::bool_switch(&config.bundle),
+      "with -o: copy every file the model names (matrices, curves, node lists) into UPDATED-files/ beside it and "
+      "name them relative to it, so the folder can be moved or sent")(
       "criterion", po::value(&criterion)->default_value(criterion),
       "ranking: evidence (Laplace approximation with the priors), bic or aicc (no priors)")(
       "max-effects", po::value(&dopt.max_effects)->default_value(dopt.max_effects), "largest number of effects combined (1..3)")(
@@ -342,7 +345,9 @@ app::DiagnoseStageResult app::RunDiagnoseStage(const DiagnoseConfig& config, con
   if (!config.output.empty()) {
     if (first.effects.empty())
       std::cerr << "ema diagnose: rank 1 is 'none': " << config.output << " is the model without an added effect\n";
-    formats::WriteModelWithEffects(config.model_path, config.output, first.effects);  // relative paths rewritten
+    formats::ModelWriteOptions write;
+    write.bundle = config.bundle;
+    formats::WriteModelWithEffects(config.model_path, config.output, first.effects, write);
     stage.updated.origin = config.output;
   }
   return stage;

@@ -8,6 +8,7 @@
 #include "ema/core/types.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/info.hpp"
+#include "ema/formats/json_codecs.hpp"
 #include "stages.hpp"
 
 namespace ema {
@@ -65,7 +66,8 @@ nlohmann::json ToJson(const formats::FileSummary& s) {
   j["modes"] = s.modes;
   j["units"] = s.units;
   j["notes"] = s.notes;
-  return j;
+  // The file name (as the shell gave it) and the labels: valid UTF-8 whatever bytes they hold.
+  return formats::ValidUtf8(std::move(j));
 }
 
 }  // namespace

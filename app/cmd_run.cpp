@@ -205,6 +205,8 @@ int RunRun(const std::vector<std::string>& args) {
       ("project", po::value<std::string>()->required(), "project file (TOML, docs/project-file.md)")
       ("output,o", po::value<std::string>()->default_value("ema-run"), "output folder (created; files in it are replaced)")
       ("no-report", "skip the HTML report")
+      ("bundle", "self-contained output: the files updated-model.toml names are copied into "
+                 "OUTDIR/updated-model-files/, so the folder can be moved or sent")
       ("no-pick", "do not open ema pick for the tests that say pick = true (their select is used)")
       ("no-browser", "with pick = true: print the picker's URL, do not open it");
   po::positional_options_description positional;
@@ -378,6 +380,8 @@ int RunRun(const std::vector<std::string>& args) {
       std::snprintf(text, sizeof text, "%.17g", sensor_mass);
       command += std::string(" --sensor-mass ") + text;
     }
+    const bool bundle = vm.count("bundle") > 0;
+    if (bundle) command += " --bundle";
     if (!project.diagnose_extra.empty()) command += " " + Joined(project.diagnose_extra);
     runner.Run("diagnose", "diagnose", "diagnose " + command, [&](std::ostream& log) {
       // [diagnose] args are `ema diagnose` options.
@@ -386,6 +390,7 @@ int RunRun(const std::vector<std::string>& args) {
       config->model_path = model_path;
       config->json_path = diagnosis_json.string();
       config->output = updated_model.string();
+      config->bundle = bundle;
       std::vector<diagnose::SetupModes> tests;
       for (std::size_t t = 0; t < project.tests.size(); ++t) {
         if (!results[t].fit) continue;

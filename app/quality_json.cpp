@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "ema/formats/json_codecs.hpp"
+
 namespace ema {
 
 namespace {
@@ -56,7 +58,8 @@ nlohmann::json QualityJson(const frf::FrfQualityReport& q, const std::vector<cur
                   {"reason", c.reason}});
   }
   const int warnings = q.WarningCount() + mode_warnings;
-  return {{"verdict", warnings > 0 ? "warn" : "pass"},
+  // Reasons, labels and notes name DOFs and files: valid UTF-8 whatever bytes they hold.
+  return formats::ValidUtf8({{"verdict", warnings > 0 ? "warn" : "pass"},
           {"warnings", warnings},
           {"thresholds",
            {{"reciprocity_tolerance", options.reciprocity_tolerance}, {"resonance_level", options.resonance_level},
@@ -67,7 +70,7 @@ nlohmann::json QualityJson(const frf::FrfQualityReport& q, const std::vector<cur
           {"frfs", frfs},
           {"coherence_map", map},
           {"modes", mj},
-          {"notes", q.notes}};
+          {"notes", q.notes}});
 }
 
 std::string QualityText(const frf::FrfQualityReport& q, const std::vector<curvefit::ModeComplexityCheck>& modes) {

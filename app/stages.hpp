@@ -116,6 +116,8 @@ struct DiagnoseConfig {
   diagnose::DiagnoseOptions options;
   /// --sensor-mass: kg of the transducer at each measured node of every test (cli.md, added turn 3).
   double sensor_mass = 0.0;
+  /// --bundle: the files the written model names are copied beside it (formats::ModelWriteOptions).
+  bool bundle = false;
 };
 
 struct DiagnoseStageResult {

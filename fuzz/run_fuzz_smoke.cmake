@@ -78,6 +78,16 @@ elseif(FUZZ_TARGET STREQUAL "plan_file")
   file(GLOB seeds "${SOURCE_DIR}/samples/guideway/truth/plan-*.toml" "${SOURCE_DIR}/tests/model/data/plan.toml"
                   "${bad}/plan_*/plan.toml")
   add_seed_files(${seeds})
+elseif(FUZZ_TARGET STREQUAL "json_results" OR FUZZ_TARGET STREQUAL "json_modes_roundtrip")
+  # The inputs are not files but bytes FuzzedDataProvider decodes into typed results; its
+  # integers come from the end of the input, so the last byte picks the writer ('A' + k: the
+  # k-th of json_results' 13 cases; the round trip's choice of 4). Texts come from the front.
+  set(body "m/s^2 Hz 101+Z modes.unv 0123456789abcdefghijklmnopqrstuvwxyz ~!@#$%^&*()_+{}|:<>?")
+  foreach(k RANGE 0 12)
+    math(EXPR code "65 + ${k}")
+    string(ASCII ${code} last)
+    add_seed("case_${k}" "${body}${body}${last}")
+  endforeach()
 else()
   message(FATAL_ERROR "unknown fuzz target ${FUZZ_TARGET}")
 endif()

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -87,11 +88,33 @@ Eigen::VectorXcd AnalyticFrf(const ModalTruth& truth, const Dof& out, const Dof&
   return AnalyticFrfShifted(truth, out, ref, frequency_hz, 0.0, quantity);
 }
 
+double ShortestSimulatedPulse(double sample_rate_hz) {
+  return kFineStepsPerPulse / (sample_rate_hz * kMaxOversampling);
+}
+
+int EffectiveOversampling(double pulse_duration_s, double sample_rate_hz, int oversampling) {
+  if (sample_rate_hz <= 0.0 || pulse_duration_s <= 0.0 || oversampling < 1)
+    throw std::invalid_argument("the sample rate, the pulse duration and the oversampling must be > 0");
+  const double needed = std::ceil(kFineStepsPerPulse / (pulse_duration_s * sample_rate_hz) - 1e-9);
+  if (needed > kMaxOversampling) {
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "a hammer pulse of %.3g s is shorter than the simulator resolves at %.6g Hz: the shortest is %.3g s "
+                  "(%d steps of a grid %d times finer than the samples)",
+                  pulse_duration_s, sample_rate_hz, ShortestSimulatedPulse(sample_rate_hz), kFineStepsPerPulse,
+                  kMaxOversampling);
+    throw std::invalid_argument(text);
+  }
+  return std::max(oversampling, static_cast<int>(needed));
+}
+
 ImpactSignals SimulateImpact(const ModalTruth& truth, const Dof& ref, const std::vector<Dof>& responses,
                              const std::vector<std::pair<double, double>>& pulses, double pulse_duration_s,
-                             double sample_rate_hz, int samples, Quantity quantity, int oversampling) {
-  if (sample_rate_hz <= 0.0 || samples <= 0 || pulse_duration_s <= 0.0 || oversampling < 1)
+                             double sample_rate_hz, int samples, Quantity quantity, int requested_oversampling) {
+  if (sample_rate_hz <= 0.0 || samples <= 0 || pulse_duration_s <= 0.0 || requested_oversampling < 1)
     throw std::invalid_argument("SimulateImpact: sample rate, samples, pulse duration and oversampling must be > 0");
+  // A pulse shorter than a few fine steps would be sampled at zero or one point: refine the grid.
+  const int oversampling = EffectiveOversampling(pulse_duration_s, sample_rate_hz, requested_oversampling);
   const int iref = truth.IndexOf(ref);
   const std::vector<double> fir = DesignAntiAlias(oversampling);
   const int half = static_cast<int>(fir.size() / 2);

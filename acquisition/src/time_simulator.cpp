@@ -54,9 +54,11 @@ int TimeIntegrator::IndexOf(const Dof& dof) const {
 
 ImpactSignals TimeIntegrator::Simulate(const Dof& ref, const std::vector<Dof>& responses,
                                        const std::vector<std::pair<double, double>>& pulses, double pulse_duration_s,
-                                       double sample_rate_hz, int samples, Quantity quantity, int oversampling) {
-  if (sample_rate_hz <= 0.0 || samples <= 0 || pulse_duration_s <= 0.0 || oversampling < 1)
+                                       double sample_rate_hz, int samples, Quantity quantity, int requested_oversampling) {
+  if (sample_rate_hz <= 0.0 || samples <= 0 || pulse_duration_s <= 0.0 || requested_oversampling < 1)
     throw std::invalid_argument("TimeIntegrator: sample rate, samples, pulse duration and oversampling must be > 0");
+  // A pulse shorter than a few fine steps would be sampled at zero or one point: refine the grid.
+  const int oversampling = EffectiveOversampling(pulse_duration_s, sample_rate_hz, requested_oversampling);
   const std::vector<double> fir = internal::DesignAntiAlias(oversampling);
   const int half = static_cast<int>(fir.size() / 2);
   const int n_fine = (samples - 1) * oversampling + 2 * half + 1;

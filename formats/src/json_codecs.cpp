@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <string_view>
 
 #include "ema/formats/model_file.hpp"
 
@@ -13,6 +14,80 @@ using json = nlohmann::json;
 json NumberOrNull(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
 json ComplexJson(std::complex<double> value) { return json::array({value.real(), value.imag()}); }
+
+namespace {
+
+// RFC 3629 UTF-8, byte ranges as in its table (and as nlohmann's decoder checks them).
+bool IsUtf8(std::string_view s) {
+  std::size_t i = 0;
+  auto in = [&](std::size_t k, unsigned lo, unsigned hi) {
+    if (k >= s.size()) return false;
+    const unsigned c = static_cast<unsigned char>(s[k]);
+    return c >= lo && c <= hi;
+  };
+  while (i < s.size()) {
+    const unsigned c = static_cast<unsigned char>(s[i]);
+    if (c < 0x80) {
+      i += 1;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      if (!in(i + 1, 0x80, 0xBF)) return false;
+      i += 2;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      const unsigned lo = c == 0xE0 ? 0xA0 : 0x80, hi = c == 0xED ? 0x9F : 0xBF;
+      if (!in(i + 1, lo, hi) || !in(i + 2, 0x80, 0xBF)) return false;
+      i += 3;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      const unsigned lo = c == 0xF0 ? 0x90 : 0x80, hi = c == 0xF4 ? 0x8F : 0xBF;
+      if (!in(i + 1, lo, hi) || !in(i + 2, 0x80, 0xBF) || !in(i + 3, 0x80, 0xBF)) return false;
+      i += 4;
+    } else {
+      return false;
+    }
+  }
+  return true;
+}
+
+void MakeUtf8(json& j) {
+  if (j.is_string()) {
+    std::string& s = j.get_ref<std::string&>();
+    if (!IsUtf8(s)) s = JsonText(s);
+  } else if (j.is_array()) {
+    for (json& e : j) MakeUtf8(e);
+  } else if (j.is_object()) {
+    bool keys = true;
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      MakeUtf8(it.value());
+      keys = keys && IsUtf8(it.key());
+    }
+    if (keys) return;
+    json fixed = json::object();
+    for (auto it = j.begin(); it != j.end(); ++it) fixed[JsonText(it.key())] = std::move(it.value());
+    j = std::move(fixed);
+  }
+}
+
+}  // namespace
+
+std::string JsonText(std::string_view text) {
+  if (IsUtf8(text)) return std::string(text);
+  std::string out;
+  out.reserve(text.size() + text.size() / 2);
+  for (const char c : text) {
+    const unsigned u = static_cast<unsigned char>(c);
+    if (u < 0x80) {
+      out.push_back(c);
+    } else {
+      out.push_back(static_cast<char>(0xC0 | (u >> 6)));
+      out.push_back(static_cast<char>(0x80 | (u & 0x3F)));
+    }
+  }
+  return out;
+}
+
+json ValidUtf8(json j) {
+  MakeUtf8(j);
+  return j;
+}
 
 json FrfSummaryJson(const frf::FrfResult& result) {
   const frf::FrfSummary& s = result.summary;
@@ -30,7 +105,7 @@ json FrfSummaryJson(const frf::FrfResult& result) {
                     {"rejected", rejected}});
   }
   const int lines = set.LineCount();
-  return {{"frfs", frfs},
+  return ValidUtf8({{"frfs", frfs},
           {"estimator", frf::EstimatorName(s.estimator)},
           {"window_decay_rate", s.window_decay_rate},
           {"roving_hammer", s.roving_hammer},
@@ -39,7 +114,7 @@ json FrfSummaryJson(const frf::FrfResult& result) {
           {"lines", lines},
           {"frequency_min_hz", lines > 0 ? set.frequency_hz[0] : 0.0},
           {"frequency_max_hz", lines > 0 ? set.frequency_hz[lines - 1] : 0.0},
-          {"notes", s.notes}};
+          {"notes", s.notes}});
 }
 
 json ModeJson(const ModeSet& set, std::size_t mode) {
@@ -190,7 +265,7 @@ json FitModesJson(const curvefit::FitResult& fit, curvefit::RefineMethod refine)
     out["refinement"] = RefinementJson(fit, refine);
     out["modal_model"] = ModalModelJson(fit.model);
   }
-  return out;
+  return ValidUtf8(std::move(out));
 }
 
 json StabilisationJson(const curvefit::FitResult& fit, const curvefit::StabilityOptions& stab) {
@@ -220,7 +295,7 @@ json StabilisationJson(const curvefit::FitResult& fit, const curvefit::Stability
                         {"cluster_orders", s.cluster_size}});
   json mif = json::array();
   for (Eigen::Index k = 0; k < d.frequency_hz.size(); ++k) mif.push_back({d.frequency_hz[k], d.sum_frf[k]});
-  return {{"band_hz", {d.band_lo_hz, d.band_hi_hz}},
+  return ValidUtf8({{"band_hz", {d.band_lo_hz, d.band_hi_hz}},
           {"references", d.references},
           {"order_min", d.order_min},
           {"order_max", d.order_max},
@@ -229,7 +304,7 @@ json StabilisationJson(const curvefit::FitResult& fit, const curvefit::Stability
                       {"v", "frequency and vector"}, {"f", "frequency"}, {"o", "new or unstable"}}},
           {"orders", orders},
           {"selected", selected},
-          {"sum_frf", mif}};
+          {"sum_frf", mif}});
 }
 
 json ModelSolutionJson(const model::Model& model, const model::Solution& sol, const std::string& setup) {
@@ -250,7 +325,7 @@ json ModelSolutionJson(const model::Model& model, const model::Solution& sol, co
   }
   j["energy_share"] = json::array();
   for (const model::EnergyShare& e : sol.energy) j["energy_share"].push_back({{"body", e.body}, {"share", e.share}});
-  return j;
+  return ValidUtf8(std::move(j));
 }
 
 json CorrelationJson(const correlation::CorrelationResult& r, const ModeSet& test, const ModeSet& model) {
@@ -293,14 +368,14 @@ json CorrelationJson(const correlation::CorrelationResult& r, const ModeSet& tes
     mac.push_back(row);
   }
   out["mac"] = mac;  // rows: test modes, columns: model modes
-  return out;
+  return ValidUtf8(std::move(out));
 }
 
 json EffectJson(const model::Effect& e) {
   json out = {{"kind", e.kind}, {"target", e.target}, {"parameters", json::object()}};
   for (const auto& [k, v] : e.parameters) out["parameters"][k] = v;
   if (e.law) out["law"] = LawToToml(*e.law);
-  return out;
+  return ValidUtf8(std::move(out));
 }
 
 namespace {
@@ -391,7 +466,7 @@ json DiagnosisJson(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions
                             {"mean_abs_frequency_error_pct", NumberOrNull(st.mean_abs_frequency_error_pct)},
                             {"mean_mac", NumberOrNull(st.mean_mac)},
                             {"mean_agreement_pct", NumberOrNull(st.mean_agreement_pct)}});
-  return out;
+  return ValidUtf8(std::move(out));
 }
 
 json DiagnosisModeRows(const diagnose::Candidate& before, const diagnose::Candidate& after) {
@@ -414,7 +489,7 @@ json DiagnosisModeRows(const diagnose::Candidate& before, const diagnose::Candid
                     {"shape_misfit_sigma_before", NumberOrNull(b.shape_misfit_sigma)},
                     {"shape_misfit_sigma_after", NumberOrNull(a.shape_misfit_sigma)}});
   }
-  return rows;
+  return ValidUtf8(std::move(rows));
 }
 
 }  // namespace ema::formats

@@ -676,7 +676,24 @@ void CollectPaths(const toml::node& node, bool fe, std::vector<const toml::node*
   }
 }
 
-std::string RewriteRelativePaths(const std::string& text, const fs::path& in_model, const fs::path& out) {
+// A name for `target` inside the bundle folder that no other bundled file has taken: the file's
+// own name, else name-2, name-3, ... before the extension.
+std::string BundleName(const fs::path& target, std::map<std::string, fs::path>* taken) {
+  const std::string stem = target.stem().string(), ext = target.extension().string();
+  for (int i = 1;; ++i) {
+    const std::string name = i == 1 ? target.filename().string() : stem + "-" + std::to_string(i) + ext;
+    auto [it, inserted] = taken->emplace(name, target);
+    if (inserted || it->second == target) return name;
+  }
+}
+
+// Rewrites every path-valued string of the model text for the output `out`. A path whose file
+// lies inside the output's folder is written relative to it; one that leaves the folder is
+// written absolute, so the model loads wherever it is copied on this machine (a `../..` path
+// breaks as soon as the file moves). With `bundle`, every referenced file is copied into
+// `<out's stem>-files/` beside the output and named relative to it: the folder then travels.
+std::string RewritePaths(const std::string& text, const fs::path& in_model, const fs::path& out,
+                         const ModelWriteOptions& options) {
   toml::table root;
   try {
     root = toml::parse(text, in_model.string());
@@ -687,6 +704,18 @@ std::string RewriteRelativePaths(const std::string& text, const fs::path& in_mod
   for (const auto& [k, v] : root) CollectPaths(v, std::string(k.str()) == "fe", &nodes);
   const fs::path in_dir = fs::absolute(in_model).parent_path();
   const fs::path out_dir = fs::weakly_canonical(fs::absolute(out).parent_path());
+  const std::string bundle_folder = out.stem().string() + "-files";
+  std::map<std::string, fs::path> bundled;  // name in the bundle folder -> the file copied there
+  if (options.bundle) {
+    // Files already in the bundle folder keep their names, so no copy can replace one of them.
+    const fs::path folder = out_dir / bundle_folder;
+    for (const toml::node* n : nodes) {
+      const fs::path p(*n->value<std::string>());
+      if (p.empty()) continue;
+      const fs::path target = fs::weakly_canonical(p.is_absolute() ? p : in_dir / p);
+      if (target.parent_path() == fs::weakly_canonical(folder)) bundled.emplace(target.filename().string(), target);
+    }
+  }
   struct Edit {
     size_t first, last;
     std::string replacement;
@@ -694,10 +723,27 @@ std::string RewriteRelativePaths(const std::string& text, const fs::path& in_mod
   std::vector<Edit> edits;
   for (const toml::node* n : nodes) {
     const fs::path p(*n->value<std::string>());
-    if (p.empty() || p.is_absolute()) continue;
-    const fs::path target = fs::weakly_canonical(in_dir / p);
-    fs::path rel = target.lexically_relative(out_dir);
-    const std::string now = (rel.empty() ? target : rel).generic_string();
+    if (p.empty()) continue;
+    const fs::path target = fs::weakly_canonical(p.is_absolute() ? p : in_dir / p);
+    std::string now;
+    if (options.bundle) {
+      const std::string name = BundleName(target, &bundled);
+      const fs::path copy = out_dir / bundle_folder / name;
+      if (fs::weakly_canonical(copy) != target) {  // re-bundling a bundled model copies nothing
+        std::ifstream in(target, std::ios::binary);
+        if (!in) throw InputError(in_model.string() + ":" + std::to_string(n->source().begin.line),
+                                  "cannot bundle '" + p.string() + "': file " + target.string() + " not found");
+        std::ostringstream bytes;
+        bytes << in.rdbuf();
+        fs::create_directories(copy.parent_path());
+        WriteTextFileAtomically(copy, bytes.str());
+      }
+      now = (fs::path(bundle_folder) / name).generic_string();
+    } else {
+      const fs::path rel = target.lexically_relative(out_dir);
+      const bool inside = !rel.empty() && *rel.begin() != "..";
+      now = inside ? rel.generic_string() : target.generic_string();
+    }
     if (now == p.generic_string()) continue;
     const auto [first, last] = LiteralAt(text, n->source().begin.line, n->source().begin.column);
     if (first == std::string::npos) continue;
@@ -714,13 +760,13 @@ std::string RewriteRelativePaths(const std::string& text, const fs::path& in_mod
 }  // namespace
 
 void WriteModelWithEffects(const std::filesystem::path& in_model, const std::filesystem::path& out,
-                           const std::vector<model::Effect>& effects) {
+                           const std::vector<model::Effect>& effects, const ModelWriteOptions& options) {
   std::ifstream in(in_model, std::ios::binary);
   if (!in) throw InputError(in_model.string(), "cannot open model file");
   std::ostringstream text;
   text << in.rdbuf();
-  // Relative curve, [fe] and node-list paths are rewritten to stay valid from the output's folder.
-  std::string s = RewriteRelativePaths(text.str(), in_model, out);
+  // Curve, [fe] and node-list paths are rewritten to stay valid wherever the output is copied.
+  std::string s = RewritePaths(text.str(), in_model, out, options);
   if (!s.empty() && s.back() != '\n') s += '\n';
   for (const model::Effect& e : effects) {
     s += '\n';

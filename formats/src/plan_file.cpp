@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <stdexcept>
 #include <cstdint>
 #include <toml++/toml.h>
 
@@ -93,11 +94,21 @@ class PlanReader : public TomlFields {
     h.force_peak_n = Number(*p, "force_peak_n", h.force_peak_n);
     h.force_spread = Number(*p, "force_spread", h.force_spread);
     h.pulse_duration_s = Number(*p, "pulse_duration_s", h.pulse_duration_s);
+    if (!(h.pulse_duration_s > 0.0))
+      throw InputError(At(p->get("pulse_duration_s") ? *p->get("pulse_duration_s") : *p), "[plan]: pulse_duration_s must be > 0");
     h.force_noise = Number(*p, "force_noise", h.force_noise);
     h.response_noise = Number(*p, "response_noise", h.response_noise);
     h.noise_relative_to_peak = Bool(*p, "noise_relative_to_peak", h.noise_relative_to_peak);
     h.trigger_jitter = Bool(*p, "trigger_jitter", h.trigger_jitter);
     h.oversampling = Integer(*p, "oversampling", h.oversampling);
+    if (h.oversampling < 1) throw InputError(At(p->get("oversampling") ? *p->get("oversampling") : *p), "[plan]: oversampling must be >= 1");
+    // The simulator refines its grid for short pulses up to a limit; past it the pulse would be
+    // lost between two fine samples (all-zero force records), so the plan is refused here.
+    try {
+      acquisition::EffectiveOversampling(h.pulse_duration_s, h.sample_rate_hz, h.oversampling);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(At(p->get("pulse_duration_s") ? *p->get("pulse_duration_s") : *p), std::string("[plan]: pulse_duration_s: ") + e.what());
+    }
     h.seed = static_cast<std::uint64_t>(Integer(*p, "seed", 1));
     h.response_full_scale = Number(*p, "response_full_scale", kNaN);
     h.force_full_scale = Number(*p, "force_full_scale", kNaN);

@@ -162,6 +162,53 @@ TEST_F(FrameParts, WrittenModelLoadsFromAnotherFolder) {
   for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-12 * b[i]);
 }
 
+// The written model, copied into another folder on the same machine, still loads and solves the
+// same: paths that leave the output's folder are written absolute (a `../..` path broke here).
+TEST_F(FrameParts, WrittenModelCopiedElsewhereLoadsTheSame) {
+  const fs::path root = testing::TempDir("frame-parts-copied");
+  const fs::path written = root / "out" / "updated.toml";
+  fs::create_directories(written.parent_path());
+  const Effect loose{"stiffness_scale", "girders/G2", {{"factor", 0.5}}, {}, 0};
+  formats::WriteModelWithEffects(files_->model, written, {loose});
+  const fs::path copied = root / "a" / "b" / "c" / "copy.toml";
+  fs::create_directories(copied.parent_path());
+  fs::copy_file(written, copied);
+  SolveOptions so;
+  so.max_modes = 6;
+  const std::vector<double> a = Frequencies(Solve(formats::ReadModelFile(copied), so));
+  const std::vector<double> b = Frequencies(Solve(ApplyEffect(formats::ReadModelFile(files_->model), loose), so));
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-12 * b[i]);
+}
+
+// --bundle: the matrices are copied beside the written model, which names them relative to its
+// folder; the whole folder moved to another path (the originals deleted) loads and solves the same.
+TEST_F(FrameParts, BundledModelTravelsWithItsFolder) {
+  const fs::path root = testing::TempDir("frame-parts-bundled");
+  const fs::path out = root / "send" / "updated.toml";
+  fs::create_directories(out.parent_path());
+  const Effect loose{"stiffness_scale", "girders/G2", {{"factor", 0.5}}, {}, 0};
+  formats::ModelWriteOptions bundle;
+  bundle.bundle = true;
+  formats::WriteModelWithEffects(files_->model, out, {loose}, bundle);
+  ASSERT_TRUE(fs::is_directory(root / "send" / "updated-files"));
+  std::ifstream in(out);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(text.find("\"updated-files/"), std::string::npos) << text;
+  EXPECT_EQ(text.find(root.string()), std::string::npos) << "no absolute path into the old folder:\n" << text;
+  // Re-bundling the bundled model in place copies nothing over itself.
+  formats::WriteModelWithEffects(out, out.parent_path() / "again.toml", {}, bundle);
+  const fs::path moved = testing::TempDir("frame-parts-bundled-moved") / "received";
+  fs::remove_all(moved);
+  fs::rename(root / "send", moved);
+  SolveOptions so;
+  so.max_modes = 6;
+  const std::vector<double> a = Frequencies(Solve(formats::ReadModelFile(moved / "updated.toml"), so));
+  const std::vector<double> b = Frequencies(Solve(ApplyEffect(formats::ReadModelFile(files_->model), loose), so));
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-12 * b[i]);
+}
+
 // Bad input names the file and line of the [[fe.part]] and what was expected.
 class PartBadInput : public ::testing::Test {
  protected:

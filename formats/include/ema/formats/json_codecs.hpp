@@ -3,10 +3,13 @@
 // stabilisation diagram (`ema fit --stabilisation`), the correlation (`ema correlate --json`) and
 // the diagnosis (`ema diagnose --json`). The report and the run summary draw from the same JSON.
 // JSON numbers cannot be NaN: a value that is not finite is written as null.
+// JSON text is UTF-8: every string and key the codecs write passes through JsonText (a label or
+// file name in another encoding is read as Latin-1, as the readers do), so dump() never throws.
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 
 #include "ema/core/types.hpp"
 #include "ema/correlation/correlate.hpp"
@@ -22,6 +25,16 @@ nlohmann::json NumberOrNull(double value);
 
 /// [re, im].
 nlohmann::json ComplexJson(std::complex<double> value);
+
+/// `text` as JSON can carry it: unchanged when it is valid UTF-8 (RFC 3629, what nlohmann's
+/// dump() checks: no overlong forms, no surrogates, nothing above U+10FFFF), else every byte
+/// read as Latin-1 and converted (what the UFF reader does with "m/s\xB2"); NUL stays (\u0000).
+std::string JsonText(std::string_view text);
+
+/// `j` with every string value and object key passed through JsonText. Each codec below that
+/// writes text returns its JSON through it, so `dump()` of any codec's result never throws
+/// nlohmann's type_error 316 (invalid UTF-8), whatever bytes the labels hold.
+nlohmann::json ValidUtf8(nlohmann::json j);
 
 /// The FRF summary of `ema frf --json`: {"frfs": [{response/reference node and dir, averages,
 /// rejected}], estimator, window_decay_rate, roving_hammer, impacts, rejected_impacts, lines,

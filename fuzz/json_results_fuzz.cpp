@@ -1,0 +1,467 @@
+// libFuzzer target: every JSON writer of a result type (formats/json_codecs.hpp, the quality and
+// amplitude JSON of app/) given a typed result decoded from the fuzzer's bytes — texts of any
+// bytes (non-UTF-8, NUL), NaN/±Inf/denormal/huge numbers, empty and large sets — must return JSON
+// whose dump() succeeds and parses back. A crash, UBSan report, leak or any exception is a finding
+// (the writers throw nothing, not even an InputError: their input is typed).
+#include <cstdint>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "amplitude_levels.hpp"
+#include "ema/formats/json_codecs.hpp"
+#include "json_fuzz_gen.hpp"
+#include "quality_json.hpp"
+
+namespace {
+
+using ema::fuzz::Gen;
+using nlohmann::json;
+
+const char* const kKinds[] = {"series_compliance", "stiffness_scale", "operating_point", "added_mass", "mass_scale",
+                              "ground_spring"};
+
+ema::model::Law MakeLaw(Gen& g, int depth) {
+  using namespace ema::model;
+  switch (g.Int(0, depth > 0 ? 5 : 4)) {
+    case 0: return LinearLaw{g.Double()};
+    case 1: {
+      TableLaw t{g.Doubles(8), g.Doubles(8), {}, {}};
+      if (g.Bool()) t.operating_deflection = g.Double();
+      if (g.Bool()) t.operating_force = g.Double();
+      return t;
+    }
+    case 2: return AirFilmLaw{g.Doubles(8), g.Doubles(8), g.Double()};
+    case 3: {
+      HertzLaw h{g.Double(), g.Double(), g.Double(), {}, {}};
+      if (g.Bool()) h.operating_deflection = g.Double();
+      if (g.Bool()) h.operating_force = g.Double();
+      return h;
+    }
+    case 4: return MicroSlipLaw{g.Double(), g.Double(), g.AnyInt()};
+    default: {
+      SeriesLaw s;
+      s.elements.resize(g.Count(3));
+      for (Law& e : s.elements) e = MakeLaw(g, depth - 1);
+      s.setting = g.Double();
+      if (g.Bool()) s.force = g.Double();
+      return s;
+    }
+  }
+}
+
+std::string Kind(Gen& g) { return g.Bool() ? std::string(kKinds[g.Int(0, 5)]) : g.Text(); }
+
+ema::model::Effect MakeEffect(Gen& g) {
+  ema::model::Effect e;
+  e.kind = Kind(g);
+  e.target = g.Text();
+  for (std::size_t n = g.Count(4); n > 0; --n) e.parameters[g.Text()] = g.Double();
+  if (g.Bool()) e.law = MakeLaw(g, 2);
+  e.line = g.AnyInt();
+  return e;
+}
+
+ema::diagnose::Candidate MakeCandidate(Gen& g) {
+  ema::diagnose::Candidate c;
+  c.effects.resize(g.Count(3));
+  for (auto& e : c.effects) e = MakeEffect(g);
+  c.parameters.resize(g.Count(5));
+  for (auto& p : c.parameters) {
+    p.effect_kind = Kind(g);
+    p.target = g.Text();
+    p.name = g.Text();
+    p.value = g.Double();
+    p.sigma = g.Double();
+    p.prior_sigma = g.Double();
+    p.lower = g.Double();
+    p.upper = g.Double();
+    p.at_bound = g.Bool();
+    p.prior_z = g.Double();
+    p.outside_prior = g.Bool();
+  }
+  c.kind = g.Text();
+  c.target = g.Text();
+  c.cost = g.Double();
+  c.log_prior = g.Double();
+  c.log_evidence = g.Double();
+  c.score = g.Double();
+  c.probability = g.Double();
+  c.explained_pct = g.Double();
+  c.mean_abs_frequency_error_pct = g.Double();
+  c.mean_mac = g.Double();
+  c.mean_agreement_pct = g.Double();
+  c.paired_modes = g.AnyInt();
+  c.modes.resize(g.Count(40));
+  for (auto& m : c.modes) {
+    m.setup = g.Text();
+    m.test_mode = g.Int(-1, 100000);  // an index into the setup's modes
+    m.model_mode = g.Int(-1, 100000);
+    m.test_frequency_hz = g.Double();
+    m.model_frequency_hz = g.Double();
+    m.agreement_pct = g.Double();
+    m.mac = g.Double();
+    m.sigma_hz = g.Double();
+    m.frequency_misfit_sigma = g.Double();
+    m.shape_misfit_sigma = g.Double();
+  }
+  c.plausible = g.Bool();
+  c.reduced_chi2 = g.Double();
+  c.noise_consistent = g.Bool();
+  c.flags = g.Texts(3);
+  c.reduced_model = g.Bool();
+  c.tied_with = g.Texts(3);
+  c.error = g.Bool() ? g.Text() : "";
+  c.rank = g.AnyInt();
+  return c;
+}
+
+ema::curvefit::ModalModel MakeModalModel(Gen& g) {
+  ema::curvefit::ModalModel m;
+  m.outputs = g.Dofs(60);
+  m.references = g.Dofs(4);
+  m.transposed = g.Bool();
+  m.frf_type = static_cast<ema::FrfType>(g.Int(0, 2));
+  m.band_lo_hz = g.Double();
+  m.band_hi_hz = g.Double();
+  m.poles_fitted.resize(g.Count(20));
+  for (auto& p : m.poles_fitted) p = g.Complex();
+  // One residue row per FRF (o·m + i): the fit's invariant, which the writer relies on.
+  const std::size_t rows = m.outputs.size() * m.references.size();
+  const std::size_t cols = g.Count(std::min<std::size_t>(20, 2000 / std::max<std::size_t>(rows, 1)));
+  m.residues.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
+  for (Eigen::Index c = 0; c < m.residues.cols(); ++c)
+    for (Eigen::Index r = 0; r < m.residues.rows(); ++r) m.residues(r, c) = g.Complex();
+  m.lower_residual = g.Vector(g.Bool() ? rows : g.Count(rows + 2));  // the writer checks these sizes
+  m.upper_residual = g.Vector(g.Bool() ? rows : g.Count(rows + 2));
+  return m;
+}
+
+ema::curvefit::FitResult MakeFit(Gen& g) {
+  ema::curvefit::FitResult f;
+  f.modes = g.Modes(200, 50, 2000);
+  auto& d = f.diagram;
+  d.orders.resize(g.Count(40));
+  for (auto& order : d.orders) {
+    order.resize(g.Count(20));
+    for (auto& p : order) {
+      p.order = g.AnyInt();
+      p.lambda = g.Complex();
+      p.lambda_fitted = g.Complex();
+      p.frequency_hz = g.Double();
+      p.damping_ratio = g.Double();
+      p.participation = g.ComplexVector(g.Count(4));
+      p.physical = g.Bool();
+      p.label = static_cast<char>(g.provider().ConsumeIntegral<std::uint8_t>());  // any byte
+    }
+  }
+  d.order_min = g.Int(-1000, 1000);  // orders run order_min + k: small by construction
+  d.order_max = g.AnyInt();
+  d.references = g.AnyInt();
+  d.band_lo_hz = g.Double();
+  d.band_hi_hz = g.Double();
+  const std::size_t lines = g.Count(2000);
+  d.frequency_hz = g.Vector(lines);
+  d.sum_frf = g.Vector(lines);  // one value per line (PolyMAX's invariant)
+  d.zoom_mapped = g.Bool();
+  f.selected.resize(g.Count(50));
+  for (auto& s : f.selected) {
+    s.pole.order = g.AnyInt();
+    s.pole.frequency_hz = g.Double();
+    s.pole.damping_ratio = g.Double();
+    s.frequency_spread_hz = g.Double();
+    s.damping_spread = g.Double();
+    s.cluster_size = g.AnyInt();
+  }
+  f.synthesis_error = g.Double();
+  f.transposed = g.Bool();
+  f.refine.termination = static_cast<ema::curvefit::RefineTermination>(g.Int(0, 3));
+  f.refine.noise_source = static_cast<ema::curvefit::NoiseSource>(g.Int(0, 1));
+  f.refine.message = g.Text();
+  f.refine.iterations = g.AnyInt();
+  f.refine.initial_cost = g.Double();
+  f.refine.final_cost = g.Double();
+  f.refine.reduced_chi2 = g.Double();
+  f.model = MakeModalModel(g);
+  f.dropped.resize(g.Count(10));
+  for (auto& p : f.dropped) {
+    p.frequency_hz = g.Double();
+    p.damping_ratio = g.Double();
+    p.merged_into_hz = g.Double();
+    p.reason = g.Text();
+  }
+  f.selection_rule = g.Text();
+  return f;
+}
+
+// Valid JSON text, and JSON that parses back.
+void Check(const json& j) {
+  std::string text;
+  try {
+    text = j.dump();
+  } catch (const json::exception& e) {
+    std::fprintf(stderr, "dump() threw: %s\n", e.what());
+    __builtin_trap();
+  }
+  try {
+    (void)json::parse(text);
+  } catch (const json::exception& e) {
+    std::fprintf(stderr, "the dump does not parse: %s\n", e.what());
+    __builtin_trap();
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace ema;
+  Gen g(data, size);
+  switch (g.Int(0, 12)) {
+    case 0: {
+      frf::FrfResult r;
+      auto& s = r.summary;
+      s.frfs.resize(g.Count(300));
+      for (auto& e : s.frfs) {
+        e.response = g.AnyDof();
+        e.reference = g.AnyDof();
+        e.averages = g.AnyInt();
+        e.rejected.resize(g.Count(4));
+        for (auto& x : e.rejected) {
+          x.impact = g.AnyInt();
+          x.set = g.Text();
+          x.reason = g.Text();
+        }
+      }
+      s.estimator = static_cast<frf::Estimator>(g.Int(0, 2));
+      s.window_decay_rate = g.Double();
+      s.roving_hammer = g.Bool();
+      s.impacts = g.AnyInt();
+      s.rejected_impacts = g.AnyInt();
+      s.notes = g.Texts(8);
+      r.frfs.frequency_hz = g.Vector(g.Count(2000));
+      Check(formats::FrfSummaryJson(r));
+      break;
+    }
+    case 1: {
+      const ModeSet set = g.Modes(2000, 200, 4000);
+      Check(formats::ModeSetJson(set));
+      break;
+    }
+    case 2: {
+      const curvefit::FitResult f = MakeFit(g);
+      Check(formats::FitModesJson(f, g.Bool() ? curvefit::RefineMethod::kMl : curvefit::RefineMethod::kNone));
+      break;
+    }
+    case 3: {
+      FrfSet frfs;
+      frfs.outputs = g.Dofs(2000);
+      frfs.references = g.Dofs(3);
+      frfs.output_sets.resize(g.Bool() ? frfs.outputs.size() : g.Count(frfs.outputs.size() + 2));  // checked by the writer
+      for (int& s : frfs.output_sets) s = g.AnyInt();
+      const json j = formats::TestSetsJson(frfs);
+      Check(j);
+      std::vector<std::vector<int>> sets;
+      Dof reference;
+      (void)formats::ReadTestSets(json::parse(j.dump()), &sets, &reference);
+      break;
+    }
+    case 4: Check(formats::ModalModelJson(MakeModalModel(g))); break;
+    case 5: {
+      const curvefit::FitResult f = MakeFit(g);
+      curvefit::StabilityOptions o;
+      o.frequency_tol = g.Double();
+      o.damping_tol = g.Double();
+      o.mac_min = g.Double();
+      Check(formats::StabilisationJson(f, o));
+      break;
+    }
+    case 6: {
+      const ModeSet test = g.Modes(20, 40, 400);
+      const ModeSet model = g.Modes(20, 40, 400);
+      correlation::CorrelationResult r;
+      r.rows.resize(g.Count(40));
+      for (auto& row : r.rows) {
+        row.test_mode = g.Int(-1, 100000);  // indices: only printed (+1)
+        row.model_mode = g.Int(-1, 100000);
+        row.test_frequency_hz = g.Double();
+        row.test_damping_ratio = g.Double();
+        row.model_frequency_hz = g.Double();
+        row.agreement_pct = g.Double();
+        row.frequency_error_pct = g.Double();
+        row.mac = g.Double();
+        row.remark = g.Text();
+      }
+      // Unpaired modes index their sets (the writer reads their frequencies).
+      if (!test.modes.empty())
+        for (std::size_t n = g.Count(10); n > 0; --n) r.pairing.unpaired_test.push_back(g.Int(0, static_cast<int>(test.modes.size()) - 1));
+      if (!model.modes.empty())
+        for (std::size_t n = g.Count(10); n > 0; --n) r.pairing.unpaired_model.push_back(g.Int(0, static_cast<int>(model.modes.size()) - 1));
+      r.pairing.pairs.resize(g.Count(10));
+      r.mean_agreement_pct = g.Double();
+      r.min_agreement_pct = g.Double();
+      r.mean_mac = g.Double();
+      r.mean_abs_frequency_error_pct = g.Double();
+      r.shared_dof_count = g.AnyInt();
+      r.test_dof_count = g.AnyInt();
+      r.comac.resize(g.Count(50));
+      for (auto& c : r.comac) c = {g.AnyDof(), g.Double()};
+      r.mac.resize(static_cast<Eigen::Index>(g.Count(30)), static_cast<Eigen::Index>(g.Count(30)));
+      for (Eigen::Index k = 0; k < r.mac.size(); ++k) r.mac.data()[k] = g.Double();
+      Check(formats::CorrelationJson(r, test, model));
+      break;
+    }
+    case 7: {
+      model::Model m;
+      m.name = g.Text();
+      model::Solution sol;
+      sol.modes = g.Modes(300, 60, 2000);
+      sol.rigid_body_frequencies_hz = g.Doubles(6);
+      sol.springs.resize(g.Count(30));
+      for (auto& s : sol.springs) {
+        s.name = g.Text();
+        s.group = g.Text();
+        s.law = g.Text();
+        s.force = g.Double();
+        s.deflection = g.Double();
+        s.stiffness = g.Double();
+        s.gap = g.Double();
+        s.element_deflections = g.Doubles(4);
+        s.element_stiffnesses = g.Doubles(4);
+      }
+      sol.energy.resize(g.Count(10));
+      for (auto& e : sol.energy) {
+        e.body = g.Text();
+        e.share = g.Doubles(30);
+      }
+      Check(formats::ModelSolutionJson(m, sol, g.Text()));
+      break;
+    }
+    case 8: Check(formats::EffectJson(MakeEffect(g))); break;
+    case 9: {
+      diagnose::Diagnosis d;
+      d.baseline = MakeCandidate(g);
+      d.candidates.resize(g.Count(8));
+      for (auto& c : d.candidates) c = MakeCandidate(g);
+      d.steps.resize(g.Count(5));
+      for (auto& s : d.steps) s = {g.Text(), g.Double(), g.Double(), g.Double()};
+      d.effect_probabilities.resize(g.Count(6));
+      for (auto& e : d.effect_probabilities) e = {Kind(g), g.Text(), g.Double()};
+      d.groups.resize(g.Count(4));
+      for (auto& gr : d.groups) {
+        gr.kind = Kind(g);
+        gr.target = g.Text();
+        for (std::size_t n = g.Count(4); n > 0; --n) gr.ranks.push_back(g.AnyInt());
+        gr.probability = g.Double();
+      }
+      d.explanation = g.Text();
+      d.residual_count = g.AnyInt();
+      d.test_mode_count = g.AnyInt();
+      d.model_solves = g.AnyInt();
+      d.candidates_screened = g.AnyInt();
+      diagnose::DiagnoseOptions o;
+      o.criterion = static_cast<diagnose::Criterion>(g.Int(0, 2));
+      o.frequency_floor = g.Double();
+      o.shape_sigma = g.Double();
+      o.max_effects = g.AnyInt();
+      o.members = g.Bool();
+      o.pairing.mac_min = g.Double();
+      Check(formats::DiagnosisJson(d, o));
+      break;
+    }
+    case 10: {
+      const diagnose::Candidate before = MakeCandidate(g);
+      Check(formats::DiagnosisModeRows(before, MakeCandidate(g)));
+      break;
+    }
+    case 11: {
+      frf::FrfQualityReport q;
+      auto verdict = [&] { return static_cast<frf::Verdict>(g.Int(0, 1)); };
+      q.reciprocity.resize(g.Count(30));
+      for (auto& c : q.reciprocity) {
+        c.dof_i = g.AnyDof();
+        c.dof_j = g.AnyDof();
+        c.relative_difference = g.Double();
+        c.amplitude_ratio = g.Double();
+        c.verdict = verdict();
+        c.reason = g.Text();
+      }
+      q.driving_points.resize(g.Count(10));
+      for (auto& c : q.driving_points) {
+        c.dof = g.AnyDof();
+        c.resonances = g.AnyInt();
+        c.flipped = g.AnyInt();
+        c.flipped_frequencies_hz = g.Doubles(5);
+        c.sign_consistency = g.Double();
+        c.verdict = verdict();
+        c.reason = g.Text();
+      }
+      q.frfs.resize(g.Count(60));
+      for (auto& s : q.frfs) {
+        s.response = g.AnyDof();
+        s.reference = g.AnyDof();
+        s.mean_coherence = g.Double();
+        s.low_coherence_fraction = g.Double();
+        s.averages = g.AnyInt();
+        s.median_random_error = g.Double();
+        s.max_random_error = g.Double();
+        s.coherence_verdict = verdict();
+        s.scatter_verdict = verdict();
+        s.reason = g.Text();
+      }
+      q.has_coherence = g.Bool();
+      q.has_averages = g.Bool();
+      q.coherence_map.frequency_hz = g.Vector(g.Count(400));
+      q.coherence_map.labels = g.Texts(20);
+      q.coherence_map.coherence.resize(static_cast<Eigen::Index>(g.Count(20)), static_cast<Eigen::Index>(g.Count(100)));
+      for (Eigen::Index k = 0; k < q.coherence_map.coherence.size(); ++k) q.coherence_map.coherence.data()[k] = g.Double();
+      q.notes = g.Texts(5);
+      std::vector<curvefit::ModeComplexityCheck> modes(g.Count(30));
+      for (auto& c : modes) {
+        c.index = g.Int(-1, 100000);
+        c.frequency_hz = g.Double();
+        c.mpc = g.Double();
+        c.mpd_deg = g.Double();
+        c.mcf = g.Double();
+        c.verdict = verdict();
+        c.reason = g.Text();
+      }
+      frf::QualityOptions o;
+      o.reciprocity_tolerance = g.Double();
+      o.resonance_level = g.Double();
+      o.coherence_min = g.Double();
+      o.coherence_max_low_fraction = g.Double();
+      o.scatter_max = g.Double();
+      Check(QualityJson(q, modes, o));
+      break;
+    }
+    default: {
+      correlation::AmplitudeResult r;
+      r.level_kind = static_cast<correlation::LevelKind>(g.Int(0, 2));
+      r.levels = g.Doubles(10);
+      r.modes.resize(g.Count(20));
+      for (auto& m : r.modes) {
+        m.points.resize(1 + g.Count(6));  // a mode is followed over >= 1 level; target_point indexes them
+        for (auto& p : m.points) {
+          p.level = g.Double();
+          p.frequency_hz = g.Double();
+          p.damping_ratio = g.Double();
+          p.frequency_std_hz = g.Double();
+          p.damping_ratio_std = g.Double();
+          p.mode_index = g.AnyInt();
+          p.poles = g.AnyInt();
+        }
+        m.frequency_trend = static_cast<correlation::FrequencyTrend>(g.Int(0, 3));
+        m.damping_trend = static_cast<correlation::DampingTrend>(g.Int(0, 2));
+        m.frequency_change_pct = g.Double();
+        m.damping_ratio_factor = g.Double();
+        m.target_point = g.Int(0, static_cast<int>(m.points.size()) - 1);
+        m.frequency_slope_z = g.Double();
+        m.frequency_extreme_z = g.Double();
+        m.damping_slope_z = g.Double();
+        m.reading = g.Text();
+      }
+      Check(app::AmplitudeJson(r));
+      break;
+    }
+  }
+  return 0;
+}
