@@ -113,6 +113,12 @@ app::FitStageResult app::RunFitStage(const FitConfig& config, const FrfSet& frfs
     throw InputError(input, what);
   }
   for (const auto& w : fit.warnings) std::cerr << "warning: " << w << "\n";
+  // What the fit handled itself is said, not warned about: nothing is left for the user to do.
+  for (const auto& d : fit.dropped) {
+    char hz[32];
+    std::snprintf(hz, sizeof hz, "%.2f", d.frequency_hz);
+    out << "note: " << input << ": pole at " << hz << " Hz dropped: " << d.reason << "\n";
+  }
   if (fit.modes.modes.empty()) throw InputError(input, NoModeReason(fit, fit_options));
 
   fit.modes.source = input;

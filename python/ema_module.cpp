@@ -689,9 +689,23 @@ ema::model::Model BuildModel(const py::handle& o) {
   if (const py::object priors = f.Get("priors"); !priors.is_none()) {
     const auto& kinds = md::EffectKinds();
     std::vector<std::string> keys(kinds.begin(), kinds.end());
+    keys.push_back("stiffness_fault_share");  // model-format.md [priors], added turn 4
+    keys.push_back("stiffness_fault_width");
     const Fields pf(priors, f.At("priors"), keys);
-    for (const auto& kind : keys)
+    for (const auto& kind : keys) {
+      if (kind.rfind("stiffness_fault_", 0) == 0) continue;
       if (const py::object v = pf.Get(kind); !v.is_none()) m.priors[kind] = Uncertainty(v, pf.At(kind));
+    }
+    if (const py::object v = pf.Get("stiffness_fault_share"); !v.is_none()) {
+      const double share = py::cast<double>(v);
+      if (!(share >= 0.0 && share < 1.0)) throw ema::InputError(pf.At("stiffness_fault_share"), "expected a share in [0, 1)");
+      m.stiffness_fault_share = share;
+    }
+    if (const py::object v = pf.Get("stiffness_fault_width"); !v.is_none()) {
+      const double width = py::cast<double>(v);
+      if (!(width > 0.0 && std::isfinite(width))) throw ema::InputError(pf.At("stiffness_fault_width"), "expected a number > 0");
+      m.stiffness_fault_width = width;
+    }
   }
   return m;
 }

@@ -360,9 +360,8 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
           const int drop = FindSplitPole(data, result.selected, lsfd, options.split_poles, &dropped);
           if (drop >= 0) {
             result.warnings.resize(warnings_before);  // this round's refinement messages are moot
+            // Handled here (the mode is fitted as one pole): a note in `dropped`, not a warning.
             result.dropped.push_back(dropped);
-            result.warnings.push_back(source + ": pole at " + std::to_string(dropped.frequency_hz) + " Hz dropped: " +
-                                      dropped.reason);
             result.selected.erase(result.selected.begin() + drop);
             continue;
           }
@@ -390,9 +389,7 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
                 << p.residue_chi2 << " on " << p.residue_dof << " degrees of freedom)";
             dropped.reason = why.str();
             result.warnings.resize(warnings_before);
-            result.dropped.push_back(dropped);
-            result.warnings.push_back(source + ": pole at " + std::to_string(dropped.frequency_hz) + " Hz dropped: " +
-                                      dropped.reason);
+            result.dropped.push_back(dropped);  // handled: a note, not a warning
             result.selected.erase(result.selected.begin() + weakest);
             continue;
           }

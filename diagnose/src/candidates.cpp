@@ -313,8 +313,9 @@ std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& op
   // weighed. Only stiffness factors carry the fault tail.
   for (Atom& a : atoms)
     if (a.info->kind == EffectKind::kStiffnessScale) {
-      a.prior.tail_share = options.stiffness_fault_share;
-      a.prior.tail_sigma = options.stiffness_fault_sigma;
+      // The model file's [priors] states the tail where the engineer knows better than the default.
+      a.prior.tail_share = base.stiffness_fault_share.value_or(options.stiffness_fault_share);
+      a.prior.tail_sigma = base.stiffness_fault_width.value_or(options.stiffness_fault_sigma);
     }
   return atoms;
 }

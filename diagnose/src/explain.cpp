@@ -366,6 +366,10 @@ std::string PriorDefaultsText() {
   std::ostringstream s;
   for (const model::EffectKindInfo& info : model::EffectKindTable())
     s << "  " << info.name << " = " << info.prior_sigma << "  (" << info.prior_meaning << ")\n";
+  const DiagnoseOptions defaults;
+  s << "  stiffness_fault_share = " << defaults.stiffness_fault_share
+    << "  (prior weight of a grossly-off stiffness: loose, cracked; 0: the plain log-normal)\n"
+    << "  stiffness_fault_width = " << defaults.stiffness_fault_sigma << "  (1σ of ln(factor) of that fault tail)\n";
   return s.str();
 }
 

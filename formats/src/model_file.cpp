@@ -428,8 +428,26 @@ class Reader : public TomlFields {
               "the model file");
     if (const toml::node* n = root.get("priors")) {
       const toml::table& t = Table(*n, "priors");
-      CheckKeys(t, std::set<std::string>(model::EffectKinds().begin(), model::EffectKinds().end()), "[priors]");
-      for (const auto& [k, v] : t) m.priors[std::string(k.str())] = Uncertainty(v, "[priors] " + std::string(k.str()));
+      std::set<std::string> keys(model::EffectKinds().begin(), model::EffectKinds().end());
+      keys.insert({"stiffness_fault_share", "stiffness_fault_width"});
+      CheckKeys(t, keys, "[priors]");
+      for (const auto& [k, v] : t) {
+        const std::string key(k.str());
+        if (key == "stiffness_fault_share") {
+          // The prior weight of a grossly-off stiffness (loose, cracked): a share in [0, 1).
+          if (!v.is_number() || !(*v.value<double>() >= 0.0 && *v.value<double>() < 1.0))
+            throw InputError(At(v), "[priors] stiffness_fault_share: expected a share in [0, 1) (0.02 = 2 %; 0: no fault "
+                                    "tail, the plain log-normal)");
+          m.stiffness_fault_share = *v.value<double>();
+        } else if (key == "stiffness_fault_width") {
+          if (!v.is_number() || !(*v.value<double>() > 0.0) || !std::isfinite(*v.value<double>()))
+            throw InputError(At(v), "[priors] stiffness_fault_width: expected the tail's 1σ of ln(factor), a number > 0 "
+                                    "(3.0: a factor anywhere within about ×/÷ 400)");
+          m.stiffness_fault_width = *v.value<double>();
+        } else {
+          m.priors[key] = Uncertainty(v, "[priors] " + key);
+        }
+      }
     }
     if (const toml::node* n = root.get("model")) {
       const toml::table& t = Table(*n, "model");

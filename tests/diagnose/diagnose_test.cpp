@@ -476,6 +476,24 @@ TEST(Diagnose, AStiffnessFarOutsideItsStatedUncertaintyIsFoundAndFlagged) {
   }
 }
 
+TEST(Diagnose, TheModelFilesFaultTailOverridesTheDefault) {
+  // The same mount MB as above, with the default options: a model whose [priors] says
+  // stiffness_fault_share = 0 (the engineer rules gross faults out) buries MB as the plain
+  // log-normal does; one that leaves the key out keeps the default tail and finds MB.
+  auto [nominal, tests] = MountMBStifferThanItsRating();
+  DiagnoseOptions options;
+  options.max_effects = 1;
+  nominal.stiffness_fault_share = 0.0;
+  const Diagnosis ruled_out = Diagnose(nominal, tests, options);
+  ASSERT_FALSE(ruled_out.candidates.empty());
+  EXPECT_NE(ruled_out.candidates.front().target, "mounts/MB") << ruled_out.explanation;
+  nominal.stiffness_fault_share.reset();
+  nominal.stiffness_fault_width = 3.0;
+  const Diagnosis tail = Diagnose(nominal, tests, options);
+  ASSERT_FALSE(tail.candidates.empty());
+  EXPECT_EQ(tail.candidates.front().target, "mounts/MB") << tail.explanation;
+}
+
 TEST(EffectProbabilities, SumOverTheCandidatesThatHoldEachEffect) {
   // Four ranked candidates with probabilities 0.4 / 0.3 / 0.2 / 0.1. By hand:
   //   series_compliance on bearings: 0.4 + 0.3 + 0.2 = 0.9

@@ -176,5 +176,33 @@ TEST(PriorKnowledge, BadValuesAreInputErrorsNamingTheKey) {
   EXPECT_THROW(formats::ReadModelFile(zero), InputError);
 }
 
+TEST(PriorKnowledge, FaultTailOfStiffnessPriorsFromTheModelFile) {
+  // model-format.md, added turn 4: [priors] stiffness_fault_share and stiffness_fault_width.
+  const auto dir = testing::TempDir("prior_fault_tail");
+  const std::string body = "[[body]]\nname = \"c\"\nmass = 1.0\ninertia = [0.01, 0.01, 0.01]\n";
+  const Model given = formats::ReadModelFile(
+      testing::WriteText(dir / "given.toml", body + "\n[priors]\nstiffness_fault_share = 0.1\nstiffness_fault_width = 2.0\n"));
+  EXPECT_DOUBLE_EQ(given.stiffness_fault_share.value_or(-1.0), 0.1);
+  EXPECT_DOUBLE_EQ(given.stiffness_fault_width.value_or(-1.0), 2.0);
+  const Model off = formats::ReadModelFile(testing::WriteText(dir / "off.toml", body + "\n[priors]\nstiffness_fault_share = 0\n"));
+  EXPECT_DOUBLE_EQ(off.stiffness_fault_share.value_or(-1.0), 0.0);
+  EXPECT_FALSE(off.stiffness_fault_width.has_value());
+  const Model none = formats::ReadModelFile(testing::WriteText(dir / "none.toml", body));
+  EXPECT_FALSE(none.stiffness_fault_share.has_value());
+  // Out of range: named with the key, the line and what was expected.
+  for (const std::string bad : {"stiffness_fault_share = 1.0", "stiffness_fault_share = -0.1", "stiffness_fault_share = \"a\"",
+                                "stiffness_fault_width = 0", "stiffness_fault_width = -3.0"}) {
+    const auto path = testing::WriteText(dir / "bad.toml", body + "\n[priors]\n" + bad + "\n");
+    try {
+      formats::ReadModelFile(path);
+      ADD_FAILURE() << bad;
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("bad.toml:7"), std::string::npos) << what;
+      EXPECT_NE(what.find(bad.substr(0, bad.find(' '))), std::string::npos) << what;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ema::model

@@ -128,6 +128,8 @@ struct FitResult {
   std::vector<SelectedPole> selected; ///< the poles behind `modes`
   double synthesis_error = 0.0;       ///< LSFD relative residual
   bool transposed = false;
+  /// What the user should act on (suspect data, a refinement that failed). What the fit handled
+  /// itself — a pole dropped as the duplicate of a kept mode or as noise — is in `dropped`.
   std::vector<std::string> warnings;
   FitTiming timing;
   MlRefineSummary refine;             ///< what the refinement did (termination kFailed when not run)

@@ -251,6 +251,9 @@ struct Model {
   /// [priors]: default prior 1σ per effect kind where an item has no `uncertainty`
   /// (model-format.md "Prior knowledge"); keys are effect kind names.
   std::map<std::string, double> priors;
+  /// [priors] stiffness_fault_share / stiffness_fault_width (model-format.md, added turn 4): the
+  /// fault tail of a stiffness factor's prior, overriding DiagnoseOptions' defaults when given.
+  std::optional<double> stiffness_fault_share, stiffness_fault_width;
   std::string origin;  ///< model file path, for messages
 
   const Body* FindBody(const std::string& name) const;
