@@ -128,6 +128,61 @@ std::string Percent(double p) {
 // The first screen: which effects are missing and how sure, each value with its σ in engineering
 // units, whether the model is then adequate to the test's noise, the look-alike readings the data
 // cannot separate (folded per member and point), and what to check.
+// A probability beside a model that stays inadequate: computed with the model's error
+// marginalised, but still only among the vocabulary's readings, so never said as certainty.
+std::string HonestPercent(const diagnose::Candidate& c) {
+  if (c.noise_consistent || c.probability < 0.99) return Percent(c.probability);
+  return "above 99 % among the readings tried, none of which makes the model adequate";
+}
+
+// The first lines for a model that no reading makes adequate: that first, where the misfit sits
+// (rank 1's evidence per test mode), and which kinds of missing physics fit such a pattern.
+void InadequateModelWords(const diagnose::Diagnosis& d, std::ostringstream* out) {
+  const diagnose::Candidate& first = d.candidates.front();
+  *out << "The model is NOT adequate to this test, with or without the effects it can try: its own error (about "
+       << Number(100.0 * first.model_error.frequency_rel, 2) << " % of each frequency, 1 − MAC about "
+       << Number(first.model_error.shape, 2)
+       << ") is larger than the test's σ. The readings below are the vocabulary's best; their probabilities are "
+          "computed with that error and compare them with each other only.\n";
+  // Where the misfit sits: the modes rank 1 leaves furthest off, in σ of the test.
+  std::vector<const diagnose::ModeComparison*> modes;
+  for (const auto& m : first.modes) modes.push_back(&m);
+  std::sort(modes.begin(), modes.end(), [](const auto* a, const auto* b) {
+    return std::hypot(a->frequency_misfit_sigma, a->shape_misfit_sigma) > std::hypot(b->frequency_misfit_sigma, b->shape_misfit_sigma);
+  });
+  std::string where;
+  for (size_t i = 0; i < modes.size() && i < 3; ++i) {
+    const auto& m = *modes[i];
+    where += (i ? "; " : "") + std::string("mode ") + std::to_string(m.test_mode + 1) + (m.setup.empty() ? "" : " of " + m.setup) +
+             " (" + Number(m.test_frequency_hz, 4) + " Hz): frequency " + (m.frequency_misfit_sigma >= 0 ? "+" : "") +
+             Number(m.frequency_misfit_sigma, 2) + "σ, shape " + Number(m.shape_misfit_sigma, 2) + "σ";
+  }
+  if (!where.empty()) *out << "  Where the misfit sits (rank 1, in the test's σ): " << where << ".\n";
+  // Which kinds of missing physics fit the pattern.
+  int above = 0, below = 0, paired = 0;
+  double frequency2 = 0.0, shape2 = 0.0;
+  for (const auto& m : first.modes) {
+    if (m.model_mode < 0) continue;
+    ++paired;
+    if (m.frequency_misfit_sigma > 1.0) ++above;
+    if (m.frequency_misfit_sigma < -1.0) ++below;
+    frequency2 += m.frequency_misfit_sigma * m.frequency_misfit_sigma;
+    shape2 += m.shape_misfit_sigma * m.shape_misfit_sigma;
+  }
+  std::vector<std::string> kinds;
+  if (paired > 0 && (above == paired || below == paired))
+    kinds.push_back(std::string("distributed ") + (above == paired ? "stiffness too high or mass too low" : "stiffness too low or mass too high") +
+                    " everywhere (a material property, a spread non-structural mass)");
+  else if (above > 0 && below > 0)
+    kinds.push_back("stiffness or mass distributed differently from the model (zone-wise scatter, a boundary the model fixes or frees)");
+  if (shape2 > frequency2) kinds.push_back("a missing part or a local mode (the shapes are off more than the frequencies)");
+  if (static_cast<int>(first.modes.size()) > paired) kinds.push_back("modes the model does not have (a missing part, a local mode)");
+  if (kinds.empty()) kinds.push_back("a boundary, a distributed stiffness or mass, or a missing part");
+  *out << "  Missing physics that fits such a pattern: ";
+  for (size_t i = 0; i < kinds.size(); ++i) *out << (i ? "; or " : "") << kinds[i];
+  *out << ".\n";
+}
+
 std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& model) {
   const diagnose::Candidate& first = d.candidates.front();
   std::vector<std::string> setups;
@@ -144,6 +199,7 @@ std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& m
                                : " (1 would be noise alone): the model still misses something these data can see"
                                  + std::string(c.effects.empty() ? "" : "; rank 1 is not the whole answer") + ".\n");
   };
+  if (!first.noise_consistent && first.model_error.dominates) InadequateModelWords(d, &out);
   if (first.effects.empty()) {
     out << "Diagnosis: no missing effect found (probability " << Percent(first.probability)
         << "): no candidate explains the mismatch by more than its prior and parameter cost.\n";
@@ -152,7 +208,7 @@ std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& m
     adequacy(first);
   } else {
     out << "Diagnosis: the model misses " << first.effects.size() << " effect" << (first.effects.size() > 1 ? "s" : "")
-        << " (rank 1, probability " << Percent(first.probability) << "):\n";
+        << " (rank 1, probability " << HonestPercent(first) << "):\n";
     for (size_t i = 0; i < first.effects.size(); ++i) {
       const model::Effect& e = first.effects[i];
       diagnose::Candidate single = first;

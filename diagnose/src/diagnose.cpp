@@ -29,6 +29,10 @@ bool DiagnoseOptions::IsValid(std::string* error) const {
   else if (!(stiffness_fault_share >= 0.0 && stiffness_fault_share < 1.0))
     why = "stiffness_fault_share must be in [0, 1), got " + std::to_string(stiffness_fault_share);
   else if (!(stiffness_fault_sigma > 0.0)) why = "stiffness_fault_sigma must be > 0";
+  else if (!(model_error_frequency_min > 0.0 && model_error_frequency_max > model_error_frequency_min))
+    why = "model_error_frequency_min must be > 0 and below model_error_frequency_max";
+  else if (!(model_error_shape_min > 0.0 && model_error_shape_max > model_error_shape_min))
+    why = "model_error_shape_min must be > 0 and below model_error_shape_max";
   if (error) *error = why;
   return why.empty();
 }
@@ -42,6 +46,9 @@ bool StringToCriterion(const std::string& name, Criterion* criterion) {
 namespace {
 
 using detail::Join;
+
+// Readings re-fitted under the model error they inferred (the best by the ranking's evidence).
+constexpr size_t kModelErrorRefits = 12;
 
 // Setups must exist; test nodes must be test points of the model.
 void CheckTests(const model::Model& base, const std::vector<SetupModes>& tests, const std::string& where) {
@@ -167,7 +174,7 @@ void PolishSwaps(detail::Problem* p, std::vector<detail::Fit>* fits, const Diagn
   for (const detail::Fit& f : *fits) {
     if (!f.ok || !f.exact || f.atoms.size() < 2) continue;
     auto it = leaders.find(f.atoms.size());
-    if (it == leaders.end() || f.score < it->second.score) leaders[f.atoms.size()] = f;
+    if (it == leaders.end() || f.search_score < it->second.search_score) leaders[f.atoms.size()] = f;
   }
   const std::vector<detail::Atom>& atoms = p->Atoms();
   using Start = std::pair<double, std::pair<std::vector<int>, std::vector<double>>>;
@@ -215,7 +222,7 @@ void PolishSwaps(detail::Problem* p, std::vector<detail::Fit>* fits, const Diagn
       if (!refit.ok) continue;
       auto same = std::find_if(fits->begin(), fits->end(), [&](const detail::Fit& f) { return f.atoms == refit.atoms; });
       if (same == fits->end()) fits->push_back(std::move(refit));
-      else if (!same->ok || !same->exact || refit.score < same->score) *same = std::move(refit);
+      else if (!same->ok || !same->exact || refit.search_score < same->search_score) *same = std::move(refit);
     }
   }
 }
@@ -228,7 +235,7 @@ void Polish(detail::Problem* p, std::vector<detail::Fit>* fits, const DiagnoseOp
   std::vector<size_t> order;
   for (size_t i = 0; i < fits->size(); ++i)
     if ((*fits)[i].ok && !(*fits)[i].atoms.empty()) order.push_back(i);
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return (*fits)[a].score < (*fits)[b].score; });
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return (*fits)[a].search_score < (*fits)[b].search_score; });
   if (static_cast<int>(order.size()) > options.exact_candidates) order.resize(options.exact_candidates);
   // Every fitted subset of those too: whether an effect pays for itself is decided against the
   // same set without it, and both must be judged by full solves (a reduced model far from its
@@ -264,7 +271,7 @@ std::vector<Step> Steps(detail::Problem* p, const std::vector<detail::Fit>& fits
   std::vector<int> order = first.atoms;
   auto single_score = [&](int a) {
     for (const auto& f : fits)
-      if (f.atoms.size() == 1 && f.atoms[0] == a && f.ok) return f.score;
+      if (f.atoms.size() == 1 && f.atoms[0] == a && f.ok) return f.search_score;
     return detail::kInf;
   };
   std::sort(order.begin(), order.end(), [&](int a, int b) { return single_score(a) < single_score(b); });
@@ -321,6 +328,15 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
   Polish(&problem, &search.fits, options);
 
   // Stage 5: ranking.
+  // The best readings by the ranking's evidence are fitted again where the model's own error
+  // dominates the test's σ (their parameters then weigh each mode by both).
+  {
+    std::vector<size_t> order(search.fits.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return search.fits[a].score < search.fits[b].score; });
+    for (size_t i = 0; i < order.size() && i < kModelErrorRefits; ++i)
+      search.fits[order[i]] = detail::RefitUnderModelError(&problem, search.fits[order[i]], options);
+  }
   std::vector<Candidate> all;
   all.push_back(none);
   for (const detail::Fit& f : search.fits) all.push_back(detail::MakeCandidate(&problem, f, none.cost));

@@ -73,6 +73,13 @@ Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, co
                      int max_modes)
     : base_(base), setups_(std::move(setups)), options_(options), max_modes_(max_modes) {
   for (const auto& s : setups_) residual_count_ += 2 * static_cast<int>(s.test_hz.size());
+  model_error_gain_.resize(residual_count_);
+  int row = 0;
+  for (const auto& s : setups_)
+    for (Eigen::Index i = 0; i < s.test_hz.size(); ++i, row += 2) {
+      model_error_gain_(row) = s.test_hz(i) / s.sigma_hz(i);
+      model_error_gain_(row + 1) = 1.0 / s.sigma_shape(i);
+    }
   int dofs = 6 * static_cast<int>(base.bodies.size()) + base.fe.Size();
   reduced_ = options.reduced_model_min_dofs > 0 && dofs >= options.reduced_model_min_dofs;
   if (reduced_) {

@@ -131,6 +131,7 @@ Candidate MakeCandidate(Problem* p, const Fit& f, double baseline_cost) {
   c.score = f.score;
   c.explained_pct = baseline_cost > 0.0 ? 100.0 * (1.0 - c.cost / baseline_cost) : 0.0;
   c.reduced_model = !f.exact;
+  c.model_error = f.model_error;
   {
     // Reduced χ² of the frequencies (cli.md): the even residuals are the frequency errors in σ.
     double chi2 = 0.0;
@@ -188,6 +189,28 @@ void Rank(std::vector<Candidate>* all, const Candidate& none) {
     if (fa) return false;
     return a.score < b.score;
   });
+  // A reading that needs a value far outside the engineer's stated uncertainty *and* still
+  // leaves the model inadequate is a poor bet when a plausible reading fits about as well: its
+  // evidence came from absorbing part of the model's own error. It is listed right below the
+  // plausible reading, flagged with what it would take (docs/diagnose.md "Model error").
+  auto outside = [](const Candidate& c) {
+    for (const FittedParameter& p : c.parameters)
+      if (p.outside_prior) return true;
+    return false;
+  };
+  for (int guard = 0; guard < 4 && !all->empty(); ++guard) {
+    Candidate& first = all->front();
+    if (!first.error.empty() || !outside(first) || first.noise_consistent) break;
+    auto plausible = std::find_if(all->begin() + 1, all->end(), [&](const Candidate& c) {
+      // Similar fit: the frequency misfit's rms within 2× of the far reading's.
+      return c.error.empty() && std::isfinite(c.score) && !outside(c) && c.reduced_chi2 <= 4.0 * first.reduced_chi2;
+    });
+    if (plausible == all->end()) break;
+    first.flags.push_back("it needs a value far outside its stated uncertainty and still leaves the model inadequate: "
+                          "listed below " + (plausible->kind == "none" ? std::string("the model as given") : CandidateLabel(*plausible)) +
+                          ", a plausible reading that fits about as well");
+    std::rotate(all->begin(), plausible, plausible + 1);
+  }
   for (size_t i = 0; i < all->size(); ++i) (*all)[i].rank = static_cast<int>(i) + 1;
   // Ties in the data: residual changes that point the same way with misfits within 2 cannot be
   // told apart by these data; only the priors then order them.

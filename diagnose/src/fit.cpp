@@ -27,6 +27,9 @@ struct ModeBlock {
   Problem* problem;
   std::vector<int> set;
   int index;
+  /// Per residual, 1/√(1 + (ε·gain)²): the residuals in units of measurement σ and model error
+  /// combined (empty: measurement σ alone).
+  std::shared_ptr<const Eigen::VectorXd> scale;
   bool operator()(double const* const* parameters, double* residuals) const {
     std::vector<double> theta(set.size());
     for (size_t k = 0; k < set.size(); ++k) theta[k] = parameters[0][k] - kOffset;
@@ -34,9 +37,35 @@ struct ModeBlock {
     if (!e->ok) return false;
     residuals[0] = e->r(2 * index);
     residuals[1] = e->r(2 * index + 1);
+    if (scale) residuals[0] *= (*scale)(2 * index), residuals[1] *= (*scale)(2 * index + 1);
     return true;
   }
 };
+
+// Per residual, the factor that turns a residual in measurement σ into one in measurement σ and
+// model error combined: σ_total² = σ² (1 + (ε·gain)²), ε the frequency scale on even residuals
+// and the shape scale on odd ones.
+Eigen::VectorXd ModelErrorScale(const Eigen::VectorXd& gain, double frequency_rel, double shape) {
+  Eigen::VectorXd scale(gain.size());
+  for (Eigen::Index i = 0; i < gain.size(); ++i) {
+    const double g = gain(i) * (i % 2 == 0 ? frequency_rel : shape);
+    scale(i) = 1.0 / std::sqrt(1.0 + g * g);
+  }
+  return scale;
+}
+
+// Grid points of a log-uniform prior over [lo, hi]: their centres in ln ε, equal weights.
+std::vector<double> LogGrid(double lo, double hi, int points) {
+  std::vector<double> out(points);
+  const double a = std::log(lo), step = (std::log(hi) - a) / points;
+  for (int i = 0; i < points; ++i) out[i] = std::exp(a + (i + 0.5) * step);
+  return out;
+}
+
+// Grid sizes over ln ε_f and ln ε_s: the marginal likelihood varies smoothly in ln ε (a step of
+// 0.5 in ln ε_f, 0.6 in ln ε_s moves it by far less than the candidates' differences).
+constexpr int kFrequencyErrorPoints = 20;
+constexpr int kShapeErrorPoints = 14;
 
 struct PriorBlock {
   const Atom* atom;
@@ -146,41 +175,60 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
   const int n = problem->ResidualCount();
   const double a = options.robust_threshold;
   f.sigma_theta = Eigen::VectorXd::Constant(k, kNaN);
-  if (k == 0) {
-    f.log_evidence = -0.5 * f.eval->cost;
-  } else {
-    // Central-difference Jacobian of the residuals in θ.
-    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(n, k);
-    bool ok = true;
-    for (int i = 0; i < k && ok; ++i) {
-      std::vector<double> plus = theta, minus = theta;
-      plus[i] += kJacobianStep;
-      minus[i] -= kJacobianStep;
-      auto ep = problem->At(set, plus);
-      auto em = problem->At(set, minus);
-      // A reduced model far from its centre can turn a softened part's stiffness indefinite; the
-      // full model then says what the neighbourhood is (benchmark case 159).
-      if (!ep->ok || !em->ok) {
-        ep = problem->Exact(set, plus);
-        em = problem->Exact(set, minus);
-      }
-      if (!ep->ok || !em->ok) ok = false;
-      else jac.col(i) = (ep->r - em->r) / (2.0 * kJacobianStep);
+  // Central-difference Jacobian of the residuals in θ (in measurement σ).
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(n, k);
+  bool ok = true;
+  for (int i = 0; i < k && ok; ++i) {
+    std::vector<double> plus = theta, minus = theta;
+    plus[i] += kJacobianStep;
+    minus[i] -= kJacobianStep;
+    auto ep = problem->At(set, plus);
+    auto em = problem->At(set, minus);
+    // A reduced model far from its centre can turn a softened part's stiffness indefinite; the
+    // full model then says what the neighbourhood is (benchmark case 159).
+    if (!ep->ok || !em->ok) {
+      ep = problem->Exact(set, plus);
+      em = problem->Exact(set, minus);
     }
-    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(k, k);
-    if (ok) {
+    if (!ep->ok || !em->ok) ok = false;
+    else jac.col(i) = (ep->r - em->r) / (2.0 * kJacobianStep);
+  }
+  if (!ok) {
+    // Without the data's curvature the Laplace evidence is only the prior's, far too high.
+    f.ok = false;
+    f.error = "the evidence could not be computed: the model does not solve next to the fitted values";
+  }
+  Eigen::VectorXd prior_curvature(k);
+  for (int i = 0; i < k; ++i) {
+    const Atom& atom = problem->Atoms()[set[i]];
+    // A floor of one over the searched range keeps H regular where neither data nor prior bind.
+    const double width = atom.spec.hi - atom.spec.lo;
+    prior_curvature(i) = atom.prior.Curvature(theta[i], atom.spec) + 1.0 / (width * width);
+  }
+  // The structure prior: every set of k effects out of the N candidates is a priori as likely
+  // as the others of its size, so each effect costs ln N (many look-alike candidates — one per
+  // point, per member — must not fit the noise by sheer number).
+  const double structure = -k * std::log(static_cast<double>(problem->Atoms().size()));
+  const Eigen::VectorXd& gain = problem->Eval().ModelErrorGain();
+
+  // The Laplace evidence at θ with the residuals in units of σ_total = σ·√(1 + (ε·gain)²):
+  //   log Z(ε) = −½ J(θ; ε) − Σ ln √(1 + (ε·gain)²) + log p(θ) + (k/2) ln 2π − ½ ln det H(ε) + structure
+  // (the Gaussian's normalisation relative to the measurement σ, common to all candidates).
+  auto evidence_at = [&](double frequency_rel, double shape, Eigen::VectorXd* sigma) {
+    const Eigen::VectorXd scale = ModelErrorScale(gain, frequency_rel, shape);
+    const Eigen::VectorXd r = f.eval->r.cwiseProduct(scale);
+    double log_norm = 0.0;
+    for (Eigen::Index i = 0; i < scale.size(); ++i) log_norm += std::log(scale(i));
+    const double log_likelihood = -0.5 * RobustCost(r, a) + log_norm;
+    if (k == 0) return log_likelihood;
+    Eigen::MatrixXd h = prior_curvature.asDiagonal();
+    if (ok)
       for (int b = 0; b + 1 < n; b += 2) {
-        const double s = f.eval->r(b) * f.eval->r(b) + f.eval->r(b + 1) * f.eval->r(b + 1);
+        const double s = r(b) * r(b) + r(b + 1) * r(b + 1);
         const double w = s <= a * a ? 1.0 : a / std::sqrt(s);
-        h += w * jac.middleRows(b, 2).transpose() * jac.middleRows(b, 2);
+        const Eigen::MatrixXd jb = scale.segment(b, 2).asDiagonal() * jac.middleRows(b, 2);
+        h += w * jb.transpose() * jb;
       }
-    }
-    for (int i = 0; i < k; ++i) {
-      const Atom& atom = problem->Atoms()[set[i]];
-      // A floor of one over the searched range keeps H regular where neither data nor prior bind.
-      const double width = atom.spec.hi - atom.spec.lo;
-      h(i, i) += atom.prior.Curvature(theta[i], atom.spec) + 1.0 / (width * width);
-    }
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(h);
     double log_det = 0.0;
     bool pd = ldlt.info() == Eigen::Success && ldlt.isPositive();
@@ -191,18 +239,43 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
         else log_det += std::log(d);
       }
     if (!pd) log_det = (h.diagonal().array().max(1e-300)).log().sum();
-    // The structure prior: every set of k effects out of the N candidates is a priori as likely
-    // as the others of its size, so each effect costs ln N (many look-alike candidates — one per
-    // point, per member — must not fit the noise by sheer number).
-    const double structure = -k * std::log(static_cast<double>(problem->Atoms().size()));
-    f.log_evidence = -0.5 * f.eval->cost + f.log_prior + 0.5 * k * std::log(2.0 * M_PI) - 0.5 * log_det + structure;
-    if (ok && pd) f.sigma_theta = ldlt.solve(Eigen::MatrixXd::Identity(k, k)).diagonal().cwiseSqrt();
-    if (!ok) {
-      // Without the data's curvature the Laplace evidence is only the prior's, far too high.
-      f.ok = false;
-      f.error = "the evidence could not be computed: the model does not solve next to the fitted values";
+    if (sigma && ok && pd) *sigma = ldlt.solve(Eigen::MatrixXd::Identity(k, k)).diagonal().cwiseSqrt();
+    return log_likelihood + f.log_prior + 0.5 * k * std::log(2.0 * M_PI) - 0.5 * log_det + structure;
+  };
+
+  const double exact_form_log_evidence = evidence_at(0.0, 0.0, &f.sigma_theta);
+  if (!options.model_error) {
+    f.log_evidence = exact_form_log_evidence;
+  } else {
+    // Marginalised over the model-error scales (log-uniform priors, docs/diagnose.md "Model
+    // error"); the parameters' σ and the reported scales are those of the most probable pair.
+    const std::vector<double> ef = LogGrid(options.model_error_frequency_min, options.model_error_frequency_max,
+                                           kFrequencyErrorPoints);
+    const std::vector<double> es = LogGrid(options.model_error_shape_min, options.model_error_shape_max, kShapeErrorPoints);
+    double best = -kInf, sum = 0.0;
+    std::vector<double> values;
+    values.reserve(ef.size() * es.size());
+    size_t best_at = 0;
+    for (double x : ef)
+      for (double y : es) {
+        values.push_back(evidence_at(x, y, nullptr));
+        if (values.back() > best) best = values.back(), best_at = values.size() - 1;
+      }
+    for (double v : values) sum += std::exp(v - best);
+    f.log_evidence = best + std::log(sum) - std::log(static_cast<double>(values.size()));
+    f.model_error.frequency_rel = ef[best_at / es.size()];
+    f.model_error.shape = es[best_at % es.size()];
+    evidence_at(f.model_error.frequency_rel, f.model_error.shape, &f.sigma_theta);
+    // Dominates: in the mean over the test modes, the model's error exceeds the measurement σ.
+    double frequency_share = 0.0, shape_share = 0.0;
+    for (Eigen::Index i = 0; i + 1 < gain.size(); i += 2) {
+      frequency_share += std::pow(f.model_error.frequency_rel * gain(i), 2);
+      shape_share += std::pow(f.model_error.shape * gain(i + 1), 2);
     }
+    const double modes = std::max<double>(1.0, gain.size() / 2);
+    f.model_error.dominates = frequency_share / modes > 1.0 || shape_share / modes > 1.0;
   }
+  f.search_score = -2.0 * exact_form_log_evidence;
   switch (options.criterion) {
     case Criterion::kEvidence:
       f.score = -2.0 * f.log_evidence;
@@ -214,11 +287,15 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
       f.score = f.eval->cost + 2.0 * k + (n - k - 1 > 0 ? 2.0 * k * (k + 1) / (n - k - 1) : 1e9);
       break;
   }
+  if (options.criterion != Criterion::kEvidence) f.search_score = f.score;
   return f;
 }
 
-Fit FitSet(Problem* problem, const std::vector<int>& set, const std::vector<double>& start,
-           const DiagnoseOptions& options) {
+namespace {
+
+// The MAP θ from `start` (Ceres), residuals scaled by `scale` (null: measurement σ alone).
+std::vector<double> SolveMap(Problem* problem, const std::vector<int>& set, const std::vector<double>& start,
+                             const DiagnoseOptions& options, const std::shared_ptr<const Eigen::VectorXd>& scale) {
   const int k = static_cast<int>(set.size());
   std::vector<double> x(k);
   for (int i = 0; i < k; ++i) x[i] = start[i] + kOffset;
@@ -227,7 +304,7 @@ Fit FitSet(Problem* problem, const std::vector<int>& set, const std::vector<doub
   nd.relative_step_size = kRelativeStep;
   for (int m = 0; m < problem->ResidualCount() / 2; ++m) {
     auto* cost = new ceres::DynamicNumericDiffCostFunction<ModeBlock, ceres::CENTRAL>(
-        new ModeBlock{problem, set, m}, ceres::TAKE_OWNERSHIP, nd);
+        new ModeBlock{problem, set, m, scale}, ceres::TAKE_OWNERSHIP, nd);
     cost->AddParameterBlock(k);
     cost->SetNumResiduals(2);
     cp.AddResidualBlock(cost, new ceres::HuberLoss(options.robust_threshold), x.data());
@@ -258,9 +335,28 @@ Fit FitSet(Problem* problem, const std::vector<int>& set, const std::vector<doub
   ceres::Solve(so, &cp, &summary);
   std::vector<double> theta(k);
   for (int i = 0; i < k; ++i) theta[i] = x[i] - kOffset;
+  return theta;
+}
+
+}  // namespace
+
+Fit FitSet(Problem* problem, const std::vector<int>& set, const std::vector<double>& start,
+           const DiagnoseOptions& options) {
+  const std::vector<double> theta = SolveMap(problem, set, start, options, nullptr);
   const double at_end = problem->Objective(set, theta);
   const double at_start = problem->Objective(set, start);
   return Assess(problem, set, at_start < at_end ? start : theta, options);
+}
+
+Fit RefitUnderModelError(Problem* problem, const Fit& fit, const DiagnoseOptions& options) {
+  // Where the model's own error dominates the test's σ, the measurement σ alone over-weighs the
+  // most precise modes: the parameters are fitted again with each residual in units of both
+  // (the scales inferred at the first optimum), and the better evidence kept.
+  if (!options.model_error || !fit.ok || !fit.model_error.dominates || fit.atoms.empty()) return fit;
+  const auto scale = std::make_shared<const Eigen::VectorXd>(
+      ModelErrorScale(problem->Eval().ModelErrorGain(), fit.model_error.frequency_rel, fit.model_error.shape));
+  Fit again = Assess(problem, fit.atoms, SolveMap(problem, fit.atoms, fit.theta, options, scale), options, fit.exact);
+  return again.ok && again.log_evidence > fit.log_evidence ? again : fit;
 }
 
 }  // namespace ema::diagnose::detail

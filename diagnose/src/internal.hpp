@@ -125,6 +125,9 @@ class Evaluator {
   Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options, int max_modes);
   ~Evaluator();
   int ResidualCount() const { return residual_count_; }
+  /// Per residual, its measurement σ in units of the model-error scale: f_test / σ_f for a
+  /// frequency, 1 / σ_shape for a shape. A model error ε adds (ε · gain)² to its variance in σ².
+  const Eigen::VectorXd& ModelErrorGain() const { return model_error_gain_; }
   int Solves() const { return solves_; }
   int ReducedSolves() const { return reduced_solves_; }
   /// Exact: the model with `effects` solved in full for every setup.
@@ -150,6 +153,7 @@ class Evaluator {
   const DiagnoseOptions& options_;
   int max_modes_ = 0;
   int residual_count_ = 0;
+  Eigen::VectorXd model_error_gain_;
   int solves_ = 0;
   int reduced_solves_ = 0;
   bool reduced_ = false;
@@ -179,8 +183,13 @@ struct Fit {
   double objective = kInf;  ///< ½ cost − log prior (what the MAP fit minimises)
   double log_prior = 0.0;
   double log_evidence = -kInf;
-  double score = kInf;      ///< −2 log evidence, or BIC / AICc
+  double score = kInf;      ///< −2 log evidence (model error marginalised), or BIC / AICc: the ranking
+  /// −2 log evidence with the model's form taken as exact (measurement σ alone): what the search
+  /// steers by. Marginalised over the model error, poor fits lie too close together for a
+  /// greedy search to tell which way is better; the ranking then weighs what it found honestly.
+  double search_score = kInf;
   Eigen::VectorXd sigma_theta;
+  ModelError model_error;   ///< the most probable model-error scales (DiagnoseOptions::model_error)
   bool ok = false;
   bool exact = true;        ///< eval from full solves (false: through a reduced model)
   std::string error;
@@ -223,6 +232,10 @@ class Problem {
 /// MAP refinement from `start` (Ceres: bounded, Huber loss, prior residuals, central numeric
 /// differences), then the Laplace evidence at the optimum.
 Fit FitSet(Problem* problem, const std::vector<int>& set, const std::vector<double>& start, const DiagnoseOptions& options);
+
+/// The fit again with each residual in units of measurement σ and the model error it inferred,
+/// when that error dominates (DiagnoseOptions::model_error); the better evidence is returned.
+Fit RefitUnderModelError(Problem* problem, const Fit& fit, const DiagnoseOptions& options);
 
 /// The evidence and posterior σ of a set at given θ (no refinement); `exact`: its misfit from full
 /// solves (the Jacobian still through the set's reduced model, when it has one).

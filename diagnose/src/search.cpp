@@ -232,12 +232,12 @@ SearchResult Search(Problem* p, const DiagnoseOptions& options) {
     std::vector<const Fit*> out;
     for (const auto& [set, f] : fitted)
       if (set.size() == size && Plausible(*p, f)) out.push_back(&f);
-    std::sort(out.begin(), out.end(), [](const Fit* a, const Fit* b) { return a->score < b->score; });
+    std::sort(out.begin(), out.end(), [](const Fit* a, const Fit* b) { return a->search_score < b->search_score; });
     if (static_cast<int>(out.size()) > count) out.resize(count);
     return out;
   };
   double best_so_far = kInf;
-  for (const Fit* f : best_of_size(1, 1)) best_so_far = f->score;
+  for (const Fit* f : best_of_size(1, 1)) best_so_far = f->search_score;
   for (int size = 2; size <= options.max_effects; ++size) {
     std::vector<Fit> beam;
     for (const Fit* f : best_of_size(size - 1, options.beam)) beam.push_back(*f);
@@ -273,8 +273,8 @@ SearchResult Search(Problem* p, const DiagnoseOptions& options) {
       if (full.ok) fit_each_without_one(full);
     }
     const auto best = best_of_size(size, 1);
-    if (best.empty() || !(best.front()->score < best_so_far)) break;
-    best_so_far = best.front()->score;
+    if (best.empty() || !(best.front()->search_score < best_so_far)) break;
+    best_so_far = best.front()->search_score;
   }
   // Swap (see the top of the file).
   std::vector<Fit> tops;
@@ -314,7 +314,7 @@ Fit FitSubset(Problem* p, const std::vector<Fit>& known, const std::vector<int>&
   for (const Fit& f : known) {
     if (!f.ok || f.atoms.size() <= set.size()) continue;
     if (!std::includes(f.atoms.begin(), f.atoms.end(), set.begin(), set.end())) continue;
-    if (!from || f.score < from->score) from = &f;
+    if (!from || f.search_score < from->search_score) from = &f;
   }
   std::vector<double> theta;
   for (int a : set) {

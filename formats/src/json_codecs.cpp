@@ -416,6 +416,14 @@ json CandidateJson(const diagnose::Candidate& c) {
     if (p.outside_prior) out["outside_prior"].push_back(keys[i]);
   }
   if (c.reduced_model) out["reduced_model"] = true;
+  // cli.md, added turn 4: the model's own error inferred with this candidate, and the effects
+  // whose value lies beyond 3σ of the stated uncertainty.
+  out["model_error"] = {{"frequency_rel", NumberOrNull(c.model_error.frequency_rel)},
+                        {"shape", NumberOrNull(c.model_error.shape)},
+                        {"dominates", c.model_error.dominates}};
+  out["outside_stated"] = json::array();
+  for (const auto& p : c.parameters)
+    if (p.outside_prior) out["outside_stated"].push_back({{"target", p.target}, {"sigmas", NumberOrNull(std::abs(p.prior_z))}});
   // Evidence per test mode: where the candidate leaves the model against the test, in σ.
   out["modes"] = json::array();
   for (const auto& m : c.modes)
@@ -444,9 +452,11 @@ json DiagnosisJson(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions
                      {"paired_modes", d.baseline.paired_modes}};
   out["candidates"] = json::array();
   for (const auto& c : d.candidates) out["candidates"].push_back(CandidateJson(c));
+  if (!d.candidates.empty()) out["model_error"] = out["candidates"].front()["model_error"];  // rank 1's (cli.md)
   out["criterion"] = diagnose::CriterionToString(options.criterion);
   out["options"] = {{"frequency_floor", options.frequency_floor}, {"shape_sigma", options.shape_sigma},
                     {"max_effects", options.max_effects}, {"members", options.members},
+                    {"model_error", options.model_error},
                     {"mac_min", options.pairing.mac_min}};  // the effective options, for reproducibility
   out["residual_count"] = d.residual_count;
   out["test_modes"] = d.test_mode_count;

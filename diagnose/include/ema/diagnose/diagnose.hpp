@@ -75,6 +75,16 @@ struct DiagnoseOptions {
   /// (docs/diagnose.md "Priors"). 0: the plain log-normal.
   double stiffness_fault_share = 0.02;
   double stiffness_fault_sigma = 3.0;
+  /// Model error in the likelihood (docs/diagnose.md "Model error"): each test quantity's
+  /// prediction error is its measurement σ combined with the model's own error — a share
+  /// ε_f of the frequency, and ε_s of (1 − MAC) — whose size the data tell: the evidence of
+  /// every candidate is marginalised over (ε_f, ε_s) with log-uniform priors on the ranges
+  /// below. Where the model's form is exact, the small scales carry the evidence and the answers
+  /// are those of an exact model; where it is not, an extra effect that absorbs a little of the
+  /// model's error no longer looks decisive. false: the model's form is taken as exact.
+  bool model_error = true;
+  double model_error_frequency_min = 1e-5, model_error_frequency_max = 0.3;  ///< ε_f range (share of f)
+  double model_error_shape_min = 1e-4, model_error_shape_max = 1.0;          ///< ε_s range (1 − MAC)
   /// Members of groups (one joint, pad, mount) and single points are candidates too.
   bool members = true;
   /// Screening: grid points of the scan over one parameter's (log) range.
@@ -123,6 +133,16 @@ struct FittedParameter {
   bool outside_prior = false;
 };
 
+/// What the diagnosis inferred about the model's own error beyond the measurement σ (cli.md,
+/// added turn 4): the most probable scales given a candidate's fit.
+struct ModelError {
+  double frequency_rel = 0.0;  ///< 1σ of a frequency prediction, a share of f
+  double shape = 0.0;          ///< 1σ of a shape residual (1 − MAC of unit-normalised shapes)
+  /// True when it exceeds the measurement σ (in the mean over the test modes): the misfit is the
+  /// model's, not the test's.
+  bool dominates = false;
+};
+
 /// One mode of one setup before/after.
 struct ModeComparison {
   std::string setup;
@@ -161,6 +181,8 @@ struct Candidate {
   /// True when that misfit is what the measurement noise explains (χ² below its 99 % quantile for
   /// those degrees of freedom): the model then misses nothing these data can show.
   bool noise_consistent = false;
+  /// The model's own error inferred with this candidate's effects (cli.md `model_error`).
+  ModelError model_error;
   /// Sentences an engineer should read: a value far outside its stated uncertainty ("the stiffness
   /// of part 'clamp' is 50× lower than modelled: check it").
   std::vector<std::string> flags;

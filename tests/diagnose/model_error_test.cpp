@@ -1,0 +1,123 @@
+// Model error in the likelihood (docs/diagnose.md "Model error"): truths the model's vocabulary
+// cannot express. The two-body stack of the diagnosis benchmark (tests/diagnose/data) with every
+// one of its 24 joint and mount springs off by its own factor — a scatter no set of up to three
+// effects can express — and no discrete effect hidden.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <filesystem>
+#include <random>
+
+#include "ema/diagnose/diagnose.hpp"
+#include "ema/formats/model_file.hpp"
+#include "ema/model/effects.hpp"
+#include "ema/model/solve.hpp"
+
+namespace ema::diagnose {
+namespace model_error_test {
+namespace fs = std::filesystem;
+using model::Model;
+
+Model Stack() { return formats::ReadModelFile(fs::path(EMA_SOURCE_DIR) / "tests/diagnose/data/benchmark-stack2.toml"); }
+
+// The truth: each spring's stiffness times e^(scatter·N(0,1)), drawn with `seed`.
+Model Scattered(const Model& nominal, double scatter, unsigned seed) {
+  Model truth = nominal;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  for (auto& s : truth.springs) s.stiffness_factor *= std::exp(scatter * g(rng));
+  return truth;
+}
+
+// The test: the truth's modes with 0.1 % frequency and 1 % shape noise (what the benchmark's
+// hammer tests give), fixed seed.
+ModeSet Measured(const Model& truth, unsigned seed) {
+  ModeSet modes = model::Solve(truth, {}).modes;
+  std::mt19937 rng(seed + 1000);
+  std::normal_distribution<double> g;
+  for (Mode& mode : modes.modes) {
+    mode.frequency_hz *= 1.0 + 1e-3 * g(rng);
+    const double rms = std::sqrt(mode.shape.squaredNorm() / mode.shape.size());
+    for (Eigen::Index i = 0; i < mode.shape.size(); ++i) mode.shape(i) += 1e-2 * rms * std::complex<double>(g(rng), g(rng));
+    mode.pole = FrequencyAndDampingToPole(mode.frequency_hz, mode.damping_ratio);
+  }
+  modes.source = "scattered stack";
+  return modes;
+}
+
+// The model error's known size: the rms relative frequency error of the nominal model against
+// the (noise-free) truth, mode by mode in frequency order.
+double RmsFrequencyError(const Model& nominal, const Model& truth) {
+  const ModeSet a = model::Solve(nominal, {}).modes, b = model::Solve(truth, {}).modes;
+  double sum = 0.0;
+  const size_t n = std::min(a.modes.size(), b.modes.size());
+  for (size_t i = 0; i < n; ++i) sum += std::pow(b.modes[i].frequency_hz / a.modes[i].frequency_hz - 1.0, 2);
+  return std::sqrt(sum / static_cast<double>(n));
+}
+
+bool HasMassEffect(const Candidate& c) {
+  for (const auto& e : c.effects)
+    if (e.kind == "added_mass" || e.kind == "mass_scale") return true;
+  return false;
+}
+
+TEST(ModelError, InferredScaleMatchesAKnownScatterAndNoMassIsInvented) {
+  // Monte Carlo over 4 seeds, 3 % spring scatter (the modes move by about 0.5 %, five times the
+  // test's σ). Each time: the model error the "none" reading infers is within a factor 2 of the
+  // truth's rms frequency error (its grid steps by 1.65×, and rms vs 1σ of a Gaussian over 12
+  // modes differ by up to ~30 %) and is said to dominate the test's σ; the masses — weighed,
+  // exact in the truth — are rarely invented: a mass must explain the data beyond what the model
+  // error explains. With the model's form taken as exact (model_error = false) the scales are
+  // not inferred at all and seed 4 is answered with an invented mass (this test fails there).
+  const Model nominal = Stack();
+  DiagnoseOptions options;
+  options.max_effects = 2;
+  int invented = 0;
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Model truth = Scattered(nominal, 0.03, seed);
+    const double known = RmsFrequencyError(nominal, truth);
+    const Diagnosis d = Diagnose(nominal, {{"", Measured(truth, seed)}}, options);
+    ASSERT_FALSE(d.candidates.empty());
+    const Candidate& none = d.baseline;
+    EXPECT_GT(none.model_error.frequency_rel, known / 2.0) << "known " << known;
+    EXPECT_LT(none.model_error.frequency_rel, known * 2.0) << "known " << known;
+    EXPECT_TRUE(none.model_error.dominates);
+    const Candidate& first = d.candidates.front();
+    if (HasMassEffect(first)) ++invented;
+    // Honest: a reading that leaves the model inadequate is not certain.
+    if (!first.noise_consistent) {
+      EXPECT_TRUE(first.model_error.dominates) << d.explanation;
+    }
+    // Seed 4: the model as given must win. With the form taken as exact, rank 1 was "joints/J1
+    // ×1.04 + 42.5 g at point 101" at 98.6 % (2026-11-26).
+    if (seed == 4) {
+      EXPECT_EQ(first.kind, "none") << d.explanation;
+    }
+  }
+  // With the form taken as exact, 2 of these 4 seeds put an invented mass at rank 1 (42 % and
+  // 98.6 %); with the model error, seed 3 alone: its scatter looks like 54 g at point 202 (the
+  // mass explains 78 % of the misfit, a genuine look-alike of this scatter on 12 modes).
+  EXPECT_LE(invented, 1);
+}
+
+TEST(ModelError, ExactFormKeepsTheExactAnswer) {
+  // The nominal stack with one mount 40 % softer and nothing else: the model's form is exact,
+  // so the inferred model error is negligible (below the test's σ) and rank 1 is the mount, as
+  // without model error.
+  const Model nominal = Stack();
+  const Model truth = model::ApplyEffect(nominal, {"stiffness_scale", "mounts/M2", {{"factor", 0.6}}, std::nullopt, 0});
+  DiagnoseOptions options;
+  options.max_effects = 1;
+  const Diagnosis d = Diagnose(nominal, {{"", Measured(truth, 7)}}, options);
+  ASSERT_FALSE(d.candidates.empty());
+  const Candidate& first = d.candidates.front();
+  EXPECT_EQ(first.target, "mounts/M2") << d.explanation;
+  EXPECT_FALSE(first.model_error.dominates) << d.explanation;
+  EXPECT_TRUE(first.noise_consistent) << d.explanation;
+  EXPECT_GT(first.probability, 0.9) << d.explanation;
+}
+
+}  // namespace model_error_test
+}  // namespace ema::diagnose
