@@ -1,6 +1,6 @@
 // libFuzzer target: the JSON writers whose output ema reads back, written then read.
 //  * MODES.json: ModeSetJson / FitModesJson (`ema model --json`, `ema fit --json`) → file →
-//    ReadModeSetJson (formats/src/modes_json.cpp). A set the reader's rules accept (cli.md: f > 0
+//    ReadModeSet (MODES.json: formats/src/modes_json.cpp). A set the reader's rules accept (cli.md: f > 0
 //    finite, damping in [0, 1) or not finite, finite shape values, DOFs with a node > 0 and a
 //    named direction, each once) must read back with every number equal (the writer prints
 //    doubles to the shortest round-trip form) and every non-finite optional value as NaN (written
@@ -122,7 +122,7 @@ void ModesRoundTrip(Gen& g) {
   const bool readable = Readable(set);
   ema::ModeSet back;
   try {
-    back = ema::formats::ReadModeSetJson(path);
+    back = ema::formats::ReadModeSet(path);  // a file starting with { is MODES.json
   } catch (const ema::InputError& e) {
     if (readable) {
       std::fprintf(stderr, "%s\n", e.what());
