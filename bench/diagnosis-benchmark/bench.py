@@ -4,6 +4,7 @@
   bench.py run    --ema EMA --cases 0:200 [--jobs N] [--seed S] [--work DIR]
   bench.py gather --work DIR [--doc docs/diagnosis-benchmark.md --svg docs/img/diagnosis-calibration.svg]
   bench.py check  --ema EMA --cases 0:21 --floor 0.9 [--work DIR]      (the CI test)
+  bench.py run    --ema EMA --family form --cases 0:60 [--jobs N]       (the model-form family)
 
 `run` generates each case (cases.py), puts it through the real chain with the built `ema`
 (simulate -> frf -> fit -> diagnose -> correlate) and writes WORK/scores/case-NNNN.json; cases
@@ -80,8 +81,8 @@ def choose_band(frequencies, family, damping, single_setup=True):
     2026 before 2026-11-26: both missed by the fit, reduced chi-square 46).
     Returns (lo, hi, sample rate, samples, modes in the band, contact time)."""
     f = sorted(x for x in frequencies if x > 1.0)
-    keep = ([x for x in f if x < 2000.0] if family not in ("fe", "parts")
-            else [x for x in f if x < 2500.0][:6 if family == "fe" else 8])
+    keep = ([x for x in f if x < 2000.0] if family not in ("fe", "parts", cases.FORM_FAMILY)
+            else [x for x in f if x < 2500.0][:8 if family == "parts" else 6])
     if len(keep) < 2:
         keep = f[:2]
     lo = 0.75 * keep[0]
@@ -190,14 +191,14 @@ def effect_shifts(ema, case, folder, lo, hi):
     return shifts
 
 
-def draw_visible_case(ema, index, seed, folder):
+def draw_visible_case(ema, index, seed, folder, family=None):
     """The case, drawn again (attempt 1, 2, ...) while one of its hidden effects moves no mode of
     the test band by VISIBLE_SHIFT_PCT: such an effect is below what the test's frequencies show
     (five times the diagnosis' frequency floor of 0.1 %), and no diagnosis can be scored on it.
     Returns the case, the band and the draws that were set aside."""
     set_aside = []
     for attempt in range(MAX_ATTEMPTS):
-        case = cases.make_case(index, seed, attempt)
+        case = cases.make_case(index, seed, attempt, family)
         shutil.rmtree(folder, ignore_errors=True)
         os.makedirs(folder)
         cases.write_case(case, folder)
@@ -216,11 +217,32 @@ def draw_visible_case(ema, index, seed, folder):
                           "max_shift_pct": [round(x, 3) for x in shifts]})
 
 
-def run_case(ema, index, seed, work, keep):
+def form_scores(ema, case, folder, diag, lo, hi, shifts):
+    """The model-form family's own scores (docs/diagnosis-benchmark.md "Model-form error"): the
+    model error's size (rms relative frequency error of the form-only truth against the nominal
+    model over the band), whether the hidden effects stand clearly above it (each moves a mode of
+    the band by ≥ 3× that rms), whether a discrete effect was invented (none hidden, rank 1 holds
+    one), and whether "not adequate" was said where the model error exceeds the test's noise
+    (rms ≥ 3× the diagnosis' 0.1 % frequency floor)."""
+    s = case["setups"][0]
+    nominal = model_frequencies(ema, folder, "nominal.toml", s, "nominal")
+    form_only = model_frequencies(ema, folder, "form-only.toml", s, "form-only")
+    pairs = [(a, b) for a, b in zip(form_only, nominal) if lo <= b <= hi]
+    rms = math.sqrt(sum((a / b - 1.0) ** 2 for a, b in pairs) / max(1, len(pairs)))
+    first = diag["candidates"][0]
+    clear = bool(case["truth"]) and all(x >= 3.0 * 100.0 * rms for x in shifts)
+    exceeds = rms >= 3.0 * 1e-3
+    return {"form_error": case["form_error"], "form_error_rms_pct": 100.0 * rms,
+            "effects_clear": clear, "invented": (not case["truth"]) and first["kind"] != "none",
+            "form_exceeds_noise": exceeds, "said_inadequate": not first.get("noise_consistent", True),
+            "model_error_rank1": first.get("model_error")}
+
+
+def run_case(ema, index, seed, work, keep, family=None):
     folder = os.path.join(work, "cases", f"{index:04d}")
     times = {}
     t0 = time.monotonic()
-    case, (lo, hi, fs, samples, n_modes, pulse), shifts, set_aside = draw_visible_case(ema, index, seed, folder)
+    case, (lo, hi, fs, samples, n_modes, pulse), shifts, set_aside = draw_visible_case(ema, index, seed, folder, family)
     setups = case["setups"]
     sflag = lambda s: ["--setup", s] if s else []
     tag = lambda s: s or "test"
@@ -251,7 +273,10 @@ def run_case(ema, index, seed, work, keep):
             out.append(read_json(os.path.join(folder, name)))
     times["correlate"] = time.monotonic() - t1
     times["total"] = time.monotonic() - t0
-    result = score(case, read_json(os.path.join(folder, "diag.json")), corr_after, corr_before, times)
+    diag = read_json(os.path.join(folder, "diag.json"))
+    result = score(case, diag, corr_after, corr_before, times)
+    if case["family"] == cases.FORM_FAMILY:
+        result.update(form_scores(ema, case, folder, diag, lo, hi, shifts))
     result.update({"attempt": case["attempt"], "set_aside": set_aside, "effect_shift_pct": shifts,
                    "band_hz": [lo, hi], "sample_rate_hz": fs, "samples": samples, "pulse_duration_s": pulse,
                    "truth_modes_in_band": n_modes,
@@ -262,13 +287,13 @@ def run_case(ema, index, seed, work, keep):
     return result
 
 
-def run_one(ema, index, seed, work, keep):
+def run_one(ema, index, seed, work, keep, family=None):
     """One case, never raising: a failed step is a scored failure with its message."""
     out = os.path.join(work, "scores", f"case-{index:04d}.json")
     try:
-        result = run_case(ema, index, seed, work, keep)
+        result = run_case(ema, index, seed, work, keep, family)
     except Exception as e:  # noqa: BLE001 — any failure of one case is that case's score, never the run's end
-        case = cases.make_case(index, seed)
+        case = cases.make_case(index, seed, 0, family)
         drawn = os.path.join(work, "cases", f"{index:04d}", "case.json")
         if os.path.isfile(drawn):  # the truth of the draw that failed (a redrawn case's own)
             case.update(read_json(drawn))
@@ -311,7 +336,7 @@ def run_range(args):
     start = time.monotonic()
     results = []
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        futures = {pool.submit(run_one, ema, i, args.seed, args.work, args.keep): i for i in indices}
+        futures = {pool.submit(run_one, ema, i, args.seed, args.work, args.keep, args.family): i for i in indices}
         for fut in concurrent.futures.as_completed(futures):
             r = fut.result()
             results.append(r)
@@ -339,6 +364,8 @@ def main():
         q.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"benchmark seed (default {DEFAULT_SEED})")
         q.add_argument("--work", default="diagnosis-benchmark-work", help="folder for cases and scores")
         q.add_argument("--keep", action="store_true", help="keep each case's files (default: scores only)")
+        q.add_argument("--family", choices=[cases.FORM_FAMILY], default=None,
+                       help="the model-form family (truth richer than the model; default: the four families)")
         if name == "check":
             q.add_argument("--floor", type=float, required=True, help="minimum share right at rank 1")
     g = sub.add_parser("gather")

@@ -269,15 +269,24 @@ def build_fe(rng, files):
            [-12, -6 * le, 12, -6 * le], [6 * le, 2 * le * le, -6 * le, 4 * le * le]]
     mel = [[156, 22 * le, 54, -13 * le], [22 * le, 4 * le * le, 13 * le, -3 * le * le],
            [54, 13 * le, 156, -22 * le], [-13 * le, -3 * le * le, -22 * le, 4 * le * le]]
-    kk, mm = {}, {}
-    for e in range(elements):
-        for i in range(4):
-            for j in range(4):
-                r, c = 2 * e + i, 2 * e + j
-                if r < c:
-                    continue
-                kk[(r, c)] = kk.get((r, c), 0.0) + kel[i][j] * ei / le ** 3
-                mm[(r, c)] = mm.get((r, c), 0.0) + mel[i][j] * mpl * le / 420.0
+    def assemble(k_factors=None, m_factors=None, extra_mass_per_length=0.0):
+        """K and M of the beam; per element a stiffness and a mass factor (the model-form
+        family's truth: element-wise scatter the nominal model cannot express) and a
+        non-structural mass spread along it (kg/m)."""
+        kk, mm = {}, {}
+        for e in range(elements):
+            kf = k_factors[e] if k_factors else 1.0
+            mf = m_factors[e] if m_factors else 1.0
+            for i in range(4):
+                for j in range(4):
+                    r, c = 2 * e + i, 2 * e + j
+                    if r < c:
+                        continue
+                    kk[(r, c)] = kk.get((r, c), 0.0) + kel[i][j] * ei * kf / le ** 3
+                    mm[(r, c)] = mm.get((r, c), 0.0) + mel[i][j] * (mpl * mf + extra_mass_per_length) * le / 420.0
+        return kk, mm
+
+    kk, mm = assemble()
     files["fe/K.mtx"] = write_mtx(2 * nodes, kk)
     files["fe/M.mtx"] = write_mtx(2 * nodes, mm)
     files["fe/dofs.csv"] = "node,dof\n" + "".join(f"{i},uz\n{i},ry\n" for i in range(1, nodes + 1))
@@ -297,6 +306,7 @@ def build_fe(rng, files):
                  f"{{ linear = {{ k = {fmt(k)} }} }}", k, a_node=node)
     for i in range(1, nodes + 1):
         m.point(100 + i, node=i)
+    m.form = {"assemble": assemble, "elements": elements, "nodes": nodes, "mass_per_length": mpl}
     return m, [None]
 
 
@@ -505,20 +515,49 @@ def draw_parameter(rng, kind, target, m, mean_k, fe_mass):
     raise ValueError(kind)
 
 
-def make_case(index, seed, attempt=0):
+# The model-form family (issue 37; bench.py --family form): the FE beam whose truth is richer than
+# the nominal model handed to the diagnosis — every element's bending stiffness and mass off by its
+# own factor (scatter 1-5 %) and a non-structural mass spread along it (0-3 % of the beam's) —
+# an error no effect of the vocabulary expresses, sized to move the modes by 0.3-3 %; with 0, 1
+# or 2 discrete hidden effects drawn as for the other families (noise by index % 3, effect count
+# by (index // 3) % 3).
+FORM_FAMILY = "form"
+FORM_EFFECT_COUNTS = (0, 1, 2)
+
+
+def make_case(index, seed, attempt=0, family=None):
     """The case: files to write (relative path -> text), the truth and the test plans. `attempt` > 0
-    draws the case again (bench.py redraws a case whose hidden effect the test cannot see)."""
-    rng = random.Random(f"diagnosis-benchmark:{seed}:{index}" + (f":{attempt}" if attempt else ""))
-    family = FAMILIES[index % len(FAMILIES)]
-    noise = NOISE_LEVELS[(index // len(FAMILIES)) % 3]
-    n_effects = EFFECT_COUNTS[(index // (3 * len(FAMILIES))) % 5]
+    draws the case again (bench.py redraws a case whose hidden effect the test cannot see).
+    `family` FORM_FAMILY: the model-form family (its own draws; the four families' cases are
+    unchanged)."""
+    form = family == FORM_FAMILY
+    rng = random.Random(f"diagnosis-benchmark:{seed}:{index}" + (":form" if form else "") + (f":{attempt}" if attempt else ""))
+    if form:
+        noise = NOISE_LEVELS[index % 3]
+        n_effects = FORM_EFFECT_COUNTS[(index // 3) % 3]
+    else:
+        family = FAMILIES[index % len(FAMILIES)]
+        noise = NOISE_LEVELS[(index // len(FAMILIES)) % 3]
+        n_effects = EFFECT_COUNTS[(index // (3 * len(FAMILIES))) % 5]
     files = {}
-    m, setups = BUILDERS[family](rng, files)
+    m, setups = BUILDERS["fe" if form else family](rng, files)
+    form_error = None
+    if form:
+        f = m.form
+        scatter = rng.uniform(0.01, 0.05)
+        k_factors = [math.exp(scatter * rng.gauss(0.0, 1.0)) for _ in range(f["elements"])]
+        m_factors = [math.exp(0.5 * scatter * rng.gauss(0.0, 1.0)) for _ in range(f["elements"])]
+        extra = f["mass_per_length"] * rng.uniform(0.0, 0.03)
+        kk, mm = f["assemble"](k_factors, m_factors, extra)
+        files["truth-fe/K.mtx"] = write_mtx(2 * f["nodes"], kk)
+        files["truth-fe/M.mtx"] = write_mtx(2 * f["nodes"], mm)
+        form_error = {"stiffness_scatter": scatter, "mass_scatter": 0.5 * scatter,
+                      "nonstructural_mass_share": extra / f["mass_per_length"]}
     fe_mass = getattr(m, "fe_mass", 0.0)
-    if family == "fe":
+    if family in ("fe", FORM_FAMILY):
         # The FE beam's mass from its M matrix: translational share (consistent matrix ~ whole).
         fe_mass = sum(v for (r, c), v in _parse_mtx(files["fe/M.mtx"]).items() if r == c and r % 2 == 0)
-    choices = effect_choices(family, m)
+    choices = effect_choices("fe" if form else family, m)
     truth = []
     tries = 0
     while len(truth) < n_effects and tries < 200:
@@ -561,14 +600,20 @@ def make_case(index, seed, attempt=0):
         e["parameters"] = params
         blocks.append(f'[[effect]]\nkind = "{e["kind"]}"\ntarget = "{e["target"]}"\n{line}\n\n')
     # The test plan: references, which points carry (triaxial) sensors, their mass, sets.
-    plan = draw_plan(rng, family, m, noise, seed, index)
+    plan = draw_plan(rng, "fe" if form else family, m, noise, seed, index)
     nominal = m.text(plan["sensor_points"], plan["sensor_mass"])
     files["nominal.toml"] = nominal
-    files["truth.toml"] = nominal + "\n" + "".join(blocks)
+    # The model-form family's truth uses the richer matrices; "form-only.toml" is that truth
+    # without the discrete effects (the model error alone, for scoring).
+    to_truth = (lambda t: t.replace('"fe/M.mtx"', '"truth-fe/M.mtx"').replace('"fe/K.mtx"', '"truth-fe/K.mtx"')) if form else (lambda t: t)
+    files["truth.toml"] = to_truth(nominal) + "\n" + "".join(blocks)
+    if form:
+        files["form-only.toml"] = to_truth(nominal)
     # simulate adds the plan's sensor masses itself: its model has no sensor [[mass]].
-    files["simulate.toml"] = m.text() + "\n" + "".join(blocks)
+    files["simulate.toml"] = to_truth(m.text()) + "\n" + "".join(blocks)
     files["plan.toml"] = plan["text"]
     return {"index": index, "seed": seed, "attempt": attempt, "family": family, "noise": noise, "truth": truth, "setups": setups,
+            "form_error": form_error,
             "effect_blocks": blocks,
             "sensor_mass": plan["sensor_mass"], "sensor_points": plan["sensor_points"],
             "references": plan["references"], "files": files}
