@@ -174,6 +174,7 @@
           (story.failing_modes.length > 4 ? '; and ' + (story.failing_modes.length - 4) + ' more' : '') +
           ' (evidence per test mode below).' }));
       }
+      if (story.model_error_note) adequacy.appendChild(el('div', { 'class': 'model-error', text: story.model_error_note }));
       st.appendChild(adequacy);
       if (n) {
         var alike = story.lookalikes || [];

@@ -299,6 +299,15 @@ json DiagnosisView(const json& diagnosis) {
     story["adequacy"] = "Adequacy to the test's noise: not computed by this diagnosis.";
   }
   story["reduced_chi2"] = NumberOrNull(chi2);
+  // The model's own error the diagnosis inferred (DIAG.json model_error, cli.md turn 4), in words
+  // where it dominates the test's σ: the probabilities then compare the readings tried only.
+  story["model_error_note"] = nullptr;
+  if (first.contains("model_error") && first["model_error"].is_object() && first["model_error"].value("dominates", false)) {
+    const double rel = Number(first["model_error"], "frequency_rel");
+    story["model_error_note"] = "The model's own error (about " + Readable(100.0 * rel) +
+                                " % of each frequency) is larger than the test's σ: no reading of the vocabulary makes the "
+                                "model exact, and the probabilities compare the readings tried with each other only.";
+  }
   // Look-alikes: the other readings within a factor 20 of rank 1's probability, one per group (the
   // rule of the summary, app/cmd_diagnose.cpp).
   json alike = json::array();
