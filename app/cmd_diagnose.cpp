@@ -273,7 +273,7 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
   DiagnoseConfig config;
   std::string criterion = diagnose::CriterionToString(config.options.criterion);
   std::vector<std::string> tests;
-  bool no_pairs = false, no_members = false;
+  bool no_pairs = false, no_members = false, exact_form = false;
   double shape_weight = 0.0;
   diagnose::DiagnoseOptions& dopt = config.options;
   auto model_value = po::value(&config.model_path);
@@ -297,6 +297,9 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
       "frequency-floor", po::value(&dopt.frequency_floor)->default_value(dopt.frequency_floor),
       "relative 1σ floor of a test frequency; a mode's σ is max(its stabilisation spread, floor × f)")(
       "shape-sigma", po::value(&dopt.shape_sigma)->default_value(dopt.shape_sigma), "1σ of (1 - MAC)")(
+      "exact-form", po::bool_switch(&exact_form),
+      "take the model's form as exact: no model error in the likelihood (docs/diagnose.md \"Model error\"; "
+      "for comparison with diagnoses made before it)")(
       "shape-weight", po::value(&shape_weight), "old form of --shape-sigma: shape σ = 0.001 / weight")(
       "mac-min", po::value(&dopt.pairing.mac_min)->default_value(dopt.pairing.mac_min), "minimum MAC of a pair while fitting")(
       "sensor-mass", po::value(&config.sensor_mass)->default_value(config.sensor_mass),
@@ -322,6 +325,7 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
     throw UsageError("--criterion must be evidence, bic or aicc, got '" + criterion + "'");
   if (no_pairs) dopt.max_effects = 1;
   if (no_members) dopt.members = false;
+  if (exact_form) dopt.model_error = false;
   if (vm.count("shape-weight")) {
     if (!(shape_weight > 0.0)) throw UsageError("--shape-weight must be > 0");
     dopt.shape_sigma = 1e-3 / shape_weight;

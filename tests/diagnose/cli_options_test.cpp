@@ -119,6 +119,27 @@ TEST_F(DiagnoseCli, ShapeWeightSetsTheShapeSigma) {
   EXPECT_GT(none_cost(heavy), none_cost(base));
 }
 
+TEST_F(DiagnoseCli, ExactFormLeavesTheModelErrorOut) {
+  // --exact-form: the likelihood without model error (docs/diagnose.md "Model error"). The model
+  // as given misses the mount compliance by far more than the test's σ, so by default its
+  // inferred model error dominates; with --exact-form no scale is inferred (0) and the options
+  // say so. Rank 1 is the same reading either way (the guideway's form is exact).
+  const json base = Diagnose("model-error", "--max-effects 1");
+  const json exact = Diagnose("exact-form", "--max-effects 1 --exact-form");
+  EXPECT_TRUE(base.at("options").at("model_error").get<bool>());
+  EXPECT_FALSE(exact.at("options").at("model_error").get<bool>());
+  auto none = [](const json& d) -> const json& {
+    for (const auto& c : d.at("candidates"))
+      if (c.at("kind") == "none") return c;
+    return d.at("candidates").at(0);
+  };
+  EXPECT_GT(none(base).at("model_error").at("frequency_rel").get<double>(), 0.01);
+  EXPECT_TRUE(none(base).at("model_error").at("dominates").get<bool>());
+  EXPECT_EQ(none(exact).at("model_error").at("frequency_rel").get<double>(), 0.0);
+  EXPECT_EQ(base.at("candidates").at(0).at("target"), exact.at("candidates").at(0).at("target"));
+  EXPECT_EQ(base.at("model_error"), base.at("candidates").at(0).at("model_error"));
+}
+
 TEST_F(DiagnoseCli, ForceLevelReportsTheAmplitudeTrend) {
   // Three levels built from the stud-5um modes with every frequency lowered by 0 %, 0.5 % and
   // 1 % (and damping unchanged): each mode is "softening" with a change of −1 % from the lowest
