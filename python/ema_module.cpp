@@ -885,7 +885,14 @@ PYBIND11_MODULE(_ema, m) {
 
   m.def(
       "mac",
-      [](const Eigen::MatrixXcd& a, const Eigen::MatrixXcd& b) { return Mat(ema::correlation::MacMatrix(a, b)); },
+      [](const Eigen::MatrixXcd& a, const Eigen::MatrixXcd& b) {
+        // Shapes of different lengths have no MAC: comparing them read past the shorter one.
+        if (a.rows() != b.rows())
+          throw py::value_error("mac: a and b must hold the same DOFs (rows): a is " + std::to_string(a.rows()) + "×" +
+                                std::to_string(a.cols()) + ", b is " + std::to_string(b.rows()) + "×" +
+                                std::to_string(b.cols()));
+        return Mat(ema::correlation::MacMatrix(a, b));
+      },
       py::arg("a"), py::arg("b"),
       "MAC between every column (mode shape) of a and every column of b (rows/DOFs aligned): |a^H b|^2 / (a^H a b^H b).");
 

@@ -1,6 +1,8 @@
 #include "ema/correlation/mac.hpp"
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace ema::correlation {
 
@@ -13,6 +15,9 @@ double Mac(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
 }
 
 Eigen::MatrixXd MacMatrix(const Eigen::MatrixXcd& a, const Eigen::MatrixXcd& b) {
+  if (a.rows() != b.rows())
+    throw std::invalid_argument("MacMatrix: the shapes must have the same DOFs (rows), got " + std::to_string(a.rows()) +
+                                " and " + std::to_string(b.rows()));
   Eigen::MatrixXd mac(a.cols(), b.cols());
   for (Eigen::Index i = 0; i < a.cols(); ++i)
     for (Eigen::Index j = 0; j < b.cols(); ++j) mac(i, j) = Mac(a.col(i), b.col(j));

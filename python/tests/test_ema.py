@@ -88,6 +88,14 @@ def test_correlate_matches_cli(beam_fit, tmp):
         assert py["mac"][p["test_mode"] - 1, p["model_mode"] - 1] == p["mac"]
 
 
+def test_mac_of_mismatched_shapes_raises():
+    # Issue 41: 2x2 against 50000x2 crashed the interpreter (exit 139), 3x2 against 4x2 quietly
+    # returned 0.75 everywhere; shapes of different lengths have no MAC.
+    for a, b in ((np.ones((2, 2)), np.ones((50000, 2))), (np.ones((3, 2)), np.ones((4, 2)))):
+        with pytest.raises(ValueError, match="same DOFs"):
+            ema.mac(a, b)
+
+
 def test_mac_of_known_shapes():
     a = np.array([[1.0, 0.0], [1.0, 1.0]], dtype=complex)
     b = np.array([[2.0j], [2.0j]])

@@ -1,6 +1,8 @@
 // MAC, AutoMAC, COMAC, agreement: hand-computed values and invariances.
 #include <gtest/gtest.h>
 
+#include <stdexcept>
+
 #include <cmath>
 #include <complex>
 #include <random>
@@ -162,6 +164,14 @@ TEST(Agreement, ReproducesThesisTables) {
   // roles swapped would read 87.7 %, which the thesis does not print.
   EXPECT_NEAR(AgreementPct(343.0, 391.0), 100.0 * (1.0 - 48.0 / 343.0), 1e-12);
   EXPECT_NEAR(AgreementPct(391.0, 343.0), 100.0 * (1.0 - 48.0 / 391.0), 1e-12);
+}
+
+TEST(Mac, ShapesOfDifferentLengthsAreRefused) {
+  // Comparing a 2-DOF shape with a 50000-DOF one read past the shorter (the Python binding crashed
+  // the interpreter; issue 41): no MAC exists between them.
+  EXPECT_THROW(MacMatrix(Eigen::MatrixXcd::Ones(2, 2), Eigen::MatrixXcd::Ones(50000, 2)), std::invalid_argument);
+  EXPECT_THROW(MacMatrix(Eigen::MatrixXcd::Ones(3, 2), Eigen::MatrixXcd::Ones(4, 2)), std::invalid_argument);
+  EXPECT_EQ(MacMatrix(Eigen::MatrixXcd::Ones(3, 2), Eigen::MatrixXcd::Ones(3, 1)).rows(), 2);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@ double Mac(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b);
 
 /// MAC between every column of `a` (rows of the result) and every column of `b` (columns).
 /// Both hold one mode per column over the same DOFs (same row count).
+/// Throws std::invalid_argument when a and b hold different numbers of DOFs (rows).
 Eigen::MatrixXd MacMatrix(const Eigen::MatrixXcd& a, const Eigen::MatrixXcd& b);
 
 /// MAC of a set with itself: symmetric, unit diagonal for non-zero shapes.
