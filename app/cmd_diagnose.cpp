@@ -140,8 +140,10 @@ std::string HonestPercent(const diagnose::Candidate& c) {
 void InadequateModelWords(const diagnose::Diagnosis& d, std::ostringstream* out) {
   const diagnose::Candidate& first = d.candidates.front();
   *out << "The model is NOT adequate to this test, with or without the effects it can try: its own error (about "
-       << Number(100.0 * first.model_error.frequency_rel, 2) << " % of each frequency, 1 − MAC about "
-       << Number(first.model_error.shape, 2)
+       << Number(100.0 * first.model_error.frequency_rel, 2) << " % of each frequency";
+  if (first.model_error.frequency_common_rel >= first.model_error.frequency_rel)
+    *out << " and " << Number(100.0 * first.model_error.frequency_common_rel, 2) << " % shared by all of them";
+  *out << ", 1 − MAC about " << Number(first.model_error.shape, 2)
        << ") is larger than the test's σ. The readings below are the vocabulary's best; their probabilities are "
           "computed with that error and compare them with each other only.\n";
   // Where the misfit sits: the modes rank 1 leaves furthest off, in σ of the test.

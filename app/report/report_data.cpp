@@ -304,8 +304,10 @@ json DiagnosisView(const json& diagnosis) {
   story["model_error_note"] = nullptr;
   if (first.contains("model_error") && first["model_error"].is_object() && first["model_error"].value("dominates", false)) {
     const double rel = Number(first["model_error"], "frequency_rel");
-    story["model_error_note"] = "The model's own error (about " + Readable(100.0 * rel) +
-                                " % of each frequency) is larger than the test's σ: no reading of the vocabulary makes the "
+    const double common = first["model_error"].contains("frequency_common_rel") ? Number(first["model_error"], "frequency_common_rel") : 0.0;
+    story["model_error_note"] = "The model's own error (about " + Readable(100.0 * rel) + " % of each frequency" +
+                                (common >= rel ? " and " + Readable(100.0 * common) + " % shared by all of them" : std::string()) +
+                                ") is larger than the test's σ: no reading of the vocabulary makes the "
                                 "model exact, and the probabilities compare the readings tried with each other only.";
   }
   // Look-alikes: the other readings within a factor 20 of rank 1's probability, one per group (the

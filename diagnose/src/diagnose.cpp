@@ -29,6 +29,8 @@ bool DiagnoseOptions::IsValid(std::string* error) const {
   else if (!(stiffness_fault_share >= 0.0 && stiffness_fault_share < 1.0))
     why = "stiffness_fault_share must be in [0, 1), got " + std::to_string(stiffness_fault_share);
   else if (!(stiffness_fault_sigma > 0.0)) why = "stiffness_fault_sigma must be > 0";
+  else if (!(effect_prior_odds > 0.0 && effect_prior_odds <= 1.0))
+    why = "effect_prior_odds must be in (0, 1], got " + std::to_string(effect_prior_odds);
   else if (!(model_error_frequency_min > 0.0 && model_error_frequency_max > model_error_frequency_min))
     why = "model_error_frequency_min must be > 0 and below model_error_frequency_max";
   else if (!(model_error_shape_min > 0.0 && model_error_shape_max > model_error_shape_min))

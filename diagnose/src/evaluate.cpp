@@ -80,6 +80,17 @@ Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, co
       model_error_gain_(row) = s.test_hz(i) / s.sigma_hz(i);
       model_error_gain_(row + 1) = 1.0 / s.sigma_shape(i);
     }
+  model_error_trend_ = Eigen::VectorXd::Zero(residual_count_);
+  if (residual_count_ > 0) {
+    Eigen::VectorXd log_hz(residual_count_ / 2);
+    row = 0;
+    for (const auto& s : setups_)
+      for (Eigen::Index i = 0; i < s.test_hz.size(); ++i) log_hz(row++) = std::log(std::max(s.test_hz(i), 1e-300));
+    const double mean = log_hz.mean();
+    const double sd = std::sqrt((log_hz.array() - mean).square().mean());
+    if (sd > 1e-9)
+      for (Eigen::Index i = 0; i < log_hz.size(); ++i) model_error_trend_(2 * i) = (log_hz(i) - mean) / sd;
+  }
   int dofs = 6 * static_cast<int>(base.bodies.size()) + base.fe.Size();
   reduced_ = options.reduced_model_min_dofs > 0 && dofs >= options.reduced_model_min_dofs;
   if (reduced_) {

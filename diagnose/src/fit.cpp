@@ -66,6 +66,9 @@ std::vector<double> LogGrid(double lo, double hi, int points) {
 // 0.5 in ln ε_f, 0.6 in ln ε_s moves it by far less than the candidates' differences).
 constexpr int kFrequencyErrorPoints = 20;
 constexpr int kShapeErrorPoints = 14;
+// The shared frequency shift ε_c: a coarser grid (a step of 0.86 in ln ε_c) — its evidence is
+// a single direction's, flatter in ε_c than the independent scales'.
+constexpr int kCommonErrorPoints = 12;
 
 struct PriorBlock {
   const Atom* atom;
@@ -207,28 +210,69 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
   }
   // The structure prior: every set of k effects out of the N candidates is a priori as likely
   // as the others of its size, so each effect costs ln N (many look-alike candidates — one per
-  // point, per member — must not fit the noise by sheer number).
-  const double structure = -k * std::log(static_cast<double>(problem->Atoms().size()));
+  // point, per member — must not fit the noise by sheer number), and one more effect is
+  // effect_prior_odds as likely as one fewer.
+  const double structure =
+      -k * (std::log(static_cast<double>(problem->Atoms().size())) - std::log(options.effect_prior_odds));
   const Eigen::VectorXd& gain = problem->Eval().ModelErrorGain();
 
-  // The Laplace evidence at θ with the residuals in units of σ_total = σ·√(1 + (ε·gain)²):
-  //   log Z(ε) = −½ J(θ; ε) − Σ ln √(1 + (ε·gain)²) + log p(θ) + (k/2) ln 2π − ½ ln det H(ε) + structure
-  // (the Gaussian's normalisation relative to the measurement σ, common to all candidates).
-  auto evidence_at = [&](double frequency_rel, double shape, Eigen::VectorXd* sigma) {
+  // The Laplace evidence at θ with the residuals in units of σ_total = σ·√(1 + (ε·gain)²) and a
+  // frequency error shared across the modes — a relative shift c₀·f common to all and a trend
+  // c₁·t·f in t = standardised ln f, (c₀, c₁) ~ N(0, ε_c² I) marginalised analytically. With r̃ the
+  // scaled residuals and U (n × 2) the two patterns in them (U_i = gain_i·scale_i·(1, t_i) on
+  // frequency rows), the covariance is I + ε_c² U Uᵀ, so (Woodbury, M = I/ε_c² + UᵀU)
+  //   r̃ᵀ(I + ε_c² U Uᵀ)⁻¹ r̃ = |r̃|² − bᵀ M⁻¹ b,   b = Uᵀr̃,
+  //   log Z(ε) = −½ J(θ; ε) − Σ ln √(1 + (ε·gain)²) − ½ ln det(I + ε_c² UᵀU) + log p(θ)
+  //              + (k/2) ln 2π − ½ ln det H(ε) + structure,
+  // J the Huber cost with the shared part removed in the Huber-weighted metric and H the posterior
+  // Hessian in the same metric (the Gaussian's normalisation is relative to the measurement σ,
+  // common to all candidates). Without the shared terms, six modes that all sit 0.3 % high
+  // (a spread mass the model lacks) read as six independent errors that one added point mass
+  // "explains"; with them they are one error of the model's overall stiffness-to-mass ratio.
+  const Eigen::VectorXd& trend = problem->Eval().ModelErrorTrend();
+  struct Scaled {
+    double cost_w = 0.0;         // Huber cost of the scaled residuals
+    double log_norm = 0.0;       // Σ ln scale
+    Eigen::Vector2d ur = Eigen::Vector2d::Zero();  // Uᵀ W r̃ (W the Huber weights)
+    Eigen::Matrix2d uu = Eigen::Matrix2d::Zero();  // Uᵀ W U
+    Eigen::MatrixXd jwj;         // Σ w J̃ᵀJ̃ + prior curvature
+    Eigen::MatrixXd jwu;         // J̃ᵀ W U (k × 2)
+  };
+  auto scaled_at = [&](double frequency_rel, double shape) {
+    Scaled out;
     const Eigen::VectorXd scale = ModelErrorScale(gain, frequency_rel, shape);
     const Eigen::VectorXd r = f.eval->r.cwiseProduct(scale);
-    double log_norm = 0.0;
-    for (Eigen::Index i = 0; i < scale.size(); ++i) log_norm += std::log(scale(i));
-    const double log_likelihood = -0.5 * RobustCost(r, a) + log_norm;
-    if (k == 0) return log_likelihood;
-    Eigen::MatrixXd h = prior_curvature.asDiagonal();
-    if (ok)
-      for (int b = 0; b + 1 < n; b += 2) {
-        const double s = r(b) * r(b) + r(b + 1) * r(b + 1);
-        const double w = s <= a * a ? 1.0 : a / std::sqrt(s);
+    for (Eigen::Index i = 0; i < scale.size(); ++i) out.log_norm += std::log(scale(i));
+    out.cost_w = RobustCost(r, a);
+    out.jwj = prior_curvature.asDiagonal();
+    out.jwu = Eigen::MatrixXd::Zero(k, 2);
+    for (int b = 0; b + 1 < n; b += 2) {
+      const double s = r(b) * r(b) + r(b + 1) * r(b + 1);
+      const double w = s <= a * a ? 1.0 : a / std::sqrt(s);
+      const Eigen::Vector2d u = gain(b) * scale(b) * Eigen::Vector2d(1.0, trend(b));  // frequency rows only
+      out.ur += w * r(b) * u;
+      out.uu += w * u * u.transpose();
+      if (k > 0 && ok) {
         const Eigen::MatrixXd jb = scale.segment(b, 2).asDiagonal() * jac.middleRows(b, 2);
-        h += w * jb.transpose() * jb;
+        out.jwj += w * jb.transpose() * jb;
+        out.jwu += w * jb.row(0).transpose() * u.transpose();
       }
+    }
+    return out;
+  };
+  auto evidence_at = [&](const Scaled& sc, double common, Eigen::VectorXd* sigma) {
+    double explained = 0.0, log_det_shared = 0.0;
+    Eigen::Matrix2d m_inv = Eigen::Matrix2d::Zero();
+    if (common > 0.0) {
+      const double c2 = common * common;
+      const Eigen::Matrix2d m = Eigen::Matrix2d::Identity() / c2 + sc.uu;
+      m_inv = m.inverse();
+      explained = sc.ur.dot(m_inv * sc.ur);
+      log_det_shared = std::log((Eigen::Matrix2d::Identity() + c2 * sc.uu).determinant());
+    }
+    const double log_likelihood = -0.5 * (sc.cost_w - explained) + sc.log_norm - 0.5 * log_det_shared;
+    if (k == 0) return log_likelihood;
+    const Eigen::MatrixXd h = sc.jwj - sc.jwu * m_inv * sc.jwu.transpose();
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(h);
     double log_det = 0.0;
     bool pd = ldlt.info() == Eigen::Success && ldlt.isPositive();
@@ -243,33 +287,41 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
     return log_likelihood + f.log_prior + 0.5 * k * std::log(2.0 * M_PI) - 0.5 * log_det + structure;
   };
 
-  const double exact_form_log_evidence = evidence_at(0.0, 0.0, &f.sigma_theta);
+  const double exact_form_log_evidence = evidence_at(scaled_at(0.0, 0.0), 0.0, &f.sigma_theta);
   if (!options.model_error) {
     f.log_evidence = exact_form_log_evidence;
   } else {
     // Marginalised over the model-error scales (log-uniform priors, docs/diagnose.md "Model
-    // error"); the parameters' σ and the reported scales are those of the most probable pair.
+    // error"); the parameters' σ and the reported scales are those of the most probable triple.
     const std::vector<double> ef = LogGrid(options.model_error_frequency_min, options.model_error_frequency_max,
                                            kFrequencyErrorPoints);
     const std::vector<double> es = LogGrid(options.model_error_shape_min, options.model_error_shape_max, kShapeErrorPoints);
+    const std::vector<double> ec = LogGrid(options.model_error_frequency_min, options.model_error_frequency_max,
+                                           kCommonErrorPoints);
     double best = -kInf, sum = 0.0;
     std::vector<double> values;
-    values.reserve(ef.size() * es.size());
+    values.reserve(ef.size() * es.size() * ec.size());
     size_t best_at = 0;
     for (double x : ef)
       for (double y : es) {
-        values.push_back(evidence_at(x, y, nullptr));
-        if (values.back() > best) best = values.back(), best_at = values.size() - 1;
+        const Scaled sc = scaled_at(x, y);
+        for (double z : ec) {
+          values.push_back(evidence_at(sc, z, nullptr));
+          if (values.back() > best) best = values.back(), best_at = values.size() - 1;
+        }
       }
     for (double v : values) sum += std::exp(v - best);
     f.log_evidence = best + std::log(sum) - std::log(static_cast<double>(values.size()));
-    f.model_error.frequency_rel = ef[best_at / es.size()];
-    f.model_error.shape = es[best_at % es.size()];
-    evidence_at(f.model_error.frequency_rel, f.model_error.shape, &f.sigma_theta);
+    f.model_error.frequency_rel = ef[best_at / (es.size() * ec.size())];
+    f.model_error.shape = es[(best_at / ec.size()) % es.size()];
+    f.model_error.frequency_common_rel = ec[best_at % ec.size()];
+    evidence_at(scaled_at(f.model_error.frequency_rel, f.model_error.shape), f.model_error.frequency_common_rel,
+                &f.sigma_theta);
     // Dominates: in the mean over the test modes, the model's error exceeds the measurement σ.
     double frequency_share = 0.0, shape_share = 0.0;
+    const double ef2 = std::pow(f.model_error.frequency_rel, 2) + std::pow(f.model_error.frequency_common_rel, 2);
     for (Eigen::Index i = 0; i + 1 < gain.size(); i += 2) {
-      frequency_share += std::pow(f.model_error.frequency_rel * gain(i), 2);
+      frequency_share += ef2 * gain(i) * gain(i);
       shape_share += std::pow(f.model_error.shape * gain(i + 1), 2);
     }
     const double modes = std::max<double>(1.0, gain.size() / 2);

@@ -128,6 +128,10 @@ class Evaluator {
   /// Per residual, its measurement σ in units of the model-error scale: f_test / σ_f for a
   /// frequency, 1 / σ_shape for a shape. A model error ε adds (ε · gain)² to its variance in σ².
   const Eigen::VectorXd& ModelErrorGain() const { return model_error_gain_; }
+  /// Per residual row: ln f of its test mode standardised over every test mode (0 on shape rows
+  /// and when all modes share one frequency) — the pattern of a model error that grows or shrinks
+  /// with frequency (shear and rotary inertia a beam model lacks, a mesh too coarse).
+  const Eigen::VectorXd& ModelErrorTrend() const { return model_error_trend_; }
   int Solves() const { return solves_; }
   int ReducedSolves() const { return reduced_solves_; }
   /// Exact: the model with `effects` solved in full for every setup.
@@ -154,6 +158,7 @@ class Evaluator {
   int max_modes_ = 0;
   int residual_count_ = 0;
   Eigen::VectorXd model_error_gain_;
+  Eigen::VectorXd model_error_trend_;
   int solves_ = 0;
   int reduced_solves_ = 0;
   bool reduced_ = false;

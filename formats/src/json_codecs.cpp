@@ -420,6 +420,7 @@ json CandidateJson(const diagnose::Candidate& c) {
   // whose value lies beyond 3σ of the stated uncertainty.
   out["model_error"] = {{"frequency_rel", NumberOrNull(c.model_error.frequency_rel)},
                         {"shape", NumberOrNull(c.model_error.shape)},
+                        {"frequency_common_rel", NumberOrNull(c.model_error.frequency_common_rel)},
                         {"dominates", c.model_error.dominates}};
   out["outside_stated"] = json::array();
   for (const auto& p : c.parameters)
@@ -456,7 +457,7 @@ json DiagnosisJson(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions
   out["criterion"] = diagnose::CriterionToString(options.criterion);
   out["options"] = {{"frequency_floor", options.frequency_floor}, {"shape_sigma", options.shape_sigma},
                     {"max_effects", options.max_effects}, {"members", options.members},
-                    {"model_error", options.model_error},
+                    {"model_error", options.model_error}, {"effect_prior_odds", options.effect_prior_odds},
                     {"mac_min", options.pairing.mac_min}};  // the effective options, for reproducibility
   out["residual_count"] = d.residual_count;
   out["test_modes"] = d.test_mode_count;

@@ -75,6 +75,12 @@ struct DiagnoseOptions {
   /// (docs/diagnose.md "Priors"). 0: the plain log-normal.
   double stiffness_fault_share = 0.02;
   double stiffness_fault_sigma = 3.0;
+  /// The prior odds of one more missing effect against one fewer, beyond the ln N every effect
+  /// pays for being one of N candidates: each effect costs ln(1 / effect_prior_odds) more. A
+  /// structure is rarely wrong in many places at once, and where the model's form is not exact a
+  /// small extra effect (a few grams at one point) otherwise wins whenever it absorbs part of the
+  /// model's own error (docs/diagnose.md "Model error"). 1: only the ln N.
+  double effect_prior_odds = 0.25;
   /// Model error in the likelihood (docs/diagnose.md "Model error"): each test quantity's
   /// prediction error is its measurement σ combined with the model's own error — a share
   /// ε_f of the frequency, and ε_s of (1 − MAC) — whose size the data tell: the evidence of
@@ -138,6 +144,11 @@ struct FittedParameter {
 struct ModelError {
   double frequency_rel = 0.0;  ///< 1σ of a frequency prediction, a share of f
   double shape = 0.0;          ///< 1σ of a shape residual (1 − MAC of unit-normalised shapes)
+  /// 1σ of a frequency error shared across the modes (a share of f): a shift common to all (the
+  /// model's overall stiffness-to-mass ratio — a modulus, a density, a spread non-structural mass)
+  /// and a trend with ln f (shear and rotary inertia a beam lacks, a mesh too coarse), each of
+  /// that size at one standard deviation of ln f.
+  double frequency_common_rel = 0.0;
   /// True when it exceeds the measurement σ (in the mean over the test modes): the misfit is the
   /// model's, not the test's.
   bool dominates = false;
