@@ -185,11 +185,63 @@ void InadequateModelWords(const diagnose::Diagnosis& d, std::ostringstream* out)
   *out << ".\n";
 }
 
-std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& model) {
+// Rank 1's effects as the first screen and the report give them: the words once, here, with
+// the numbers they stand for (DIAG.json "findings"; the report reads these fields and parses
+// no text).
+struct EffectFinding {
+  std::string kind, target;
+  std::string description;  ///< e.g. "a Hertz contact in series with group 'bearings'" (no values)
+  std::string full;         ///< the same with a law's constants, as the summary line gives it
+  std::string values;       ///< the fitted values in engineering units with σ, and what they mean per spring
+  double probability = 0.0;  ///< over every candidate that holds this effect
+  std::string wildcard;      ///< the same kind on any member/point of the group ("" when none)
+  double wildcard_probability = 0.0;
+};
+
+std::vector<EffectFinding> RankOneFindings(const diagnose::Diagnosis& d, const model::Model& model) {
+  std::vector<EffectFinding> out;
   const diagnose::Candidate& first = d.candidates.front();
   std::vector<std::string> setups;
   for (const auto& m : first.modes)
     if (std::find(setups.begin(), setups.end(), m.setup) == setups.end()) setups.push_back(m.setup);
+  for (const model::Effect& e : first.effects) {
+    EffectFinding f;
+    f.kind = e.kind;
+    f.target = e.target;
+    diagnose::Candidate single = first;
+    single.effects = {e};
+    f.full = diagnose::DescribeCandidate(single);
+    f.description = diagnose::DescribeCandidate(single, false);
+    const std::string wildcard = diagnose::EffectWildcard(e.target);
+    for (const auto& ep : d.effect_probabilities) {
+      if (ep.kind == e.kind && ep.target == e.target) f.probability = ep.probability;
+      if (ep.kind == e.kind && ep.target == wildcard && wildcard != e.target) {
+        f.wildcard = wildcard;
+        f.wildcard_probability = ep.probability;
+      }
+    }
+    for (const auto& p : first.parameters)
+      if (p.effect_kind == e.kind && p.target == e.target) f.values += (f.values.empty() ? "" : "; ") + ParameterWords(p, e);
+    const std::string springs = SpringStiffnessWords(model, first.effects, e, setups);
+    if (!springs.empty()) f.values += (f.values.empty() ? "" : "; ") + springs;
+    out.push_back(std::move(f));
+  }
+  return out;
+}
+
+nlohmann::json FindingsJson(const std::vector<EffectFinding>& findings) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const EffectFinding& f : findings) {
+    nlohmann::json j = {{"kind", f.kind}, {"target", f.target}, {"description", f.description},
+                        {"values", f.values}, {"probability", f.probability}};
+    if (f.wildcard_probability > 0.0) j["any"] = {{"target", f.wildcard}, {"probability", f.wildcard_probability}};
+    out.push_back(std::move(j));
+  }
+  return out;
+}
+
+std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& model) {
+  const diagnose::Candidate& first = d.candidates.front();
   std::ostringstream out;
   auto adequacy = [&](const diagnose::Candidate& c) {
     const bool tiny = c.noise_consistent && c.reduced_chi2 < 0.01;  // well inside σ (the floor may dominate it)
@@ -211,28 +263,14 @@ std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& m
   } else {
     out << "Diagnosis: the model misses " << first.effects.size() << " effect" << (first.effects.size() > 1 ? "s" : "")
         << " (rank 1, probability " << HonestPercent(first) << "):\n";
-    for (size_t i = 0; i < first.effects.size(); ++i) {
-      const model::Effect& e = first.effects[i];
-      diagnose::Candidate single = first;
-      single.effects = {e};
-      double p_exact = 0.0, p_wild = 0.0;
-      const std::string wildcard = diagnose::EffectWildcard(e.target);
-      for (const auto& ep : d.effect_probabilities) {
-        if (ep.kind == e.kind && ep.target == e.target) p_exact = ep.probability;
-        if (ep.kind == e.kind && ep.target == wildcard && wildcard != e.target) p_wild = ep.probability;
-      }
-      out << "  " << i + 1 << ". " << diagnose::DescribeCandidate(single) << " — " << Percent(p_exact)
-          << " over every candidate that holds it";
-      if (p_wild > 0.0) out << " (" << Percent(p_wild) << " for " << e.kind << " on any of " << wildcard << ")";
+    const std::vector<EffectFinding> findings = RankOneFindings(d, model);
+    for (size_t i = 0; i < findings.size(); ++i) {
+      const EffectFinding& f = findings[i];
+      out << "  " << i + 1 << ". " << f.full << " — " << Percent(f.probability) << " over every candidate that holds it";
+      if (f.wildcard_probability > 0.0)
+        out << " (" << Percent(f.wildcard_probability) << " for " << f.kind << " on any of " << f.wildcard << ")";
       out << "\n";
-      std::vector<std::string> values;
-      for (const auto& p : first.parameters)
-        if (p.effect_kind == e.kind && p.target == e.target) values.push_back(ParameterWords(p, e));
-      std::string line;
-      for (const auto& v : values) line += (line.empty() ? "" : "; ") + v;
-      const std::string springs = SpringStiffnessWords(model, first.effects, e, setups);
-      if (!springs.empty()) line += (line.empty() ? "" : "; ") + springs;
-      if (!line.empty()) out << "     " << line << "\n";
+      if (!f.values.empty()) out << "     " << f.values << "\n";
     }
     out << "  Mean frequency error " << FixedPoint(d.baseline.mean_abs_frequency_error_pct, 2) << " % → "
         << FixedPoint(first.mean_abs_frequency_error_pct, 2) << " %, mean MAC " << FixedPoint(d.baseline.mean_mac, 3)
@@ -353,6 +391,7 @@ app::DiagnoseStageResult app::RunDiagnoseStage(const DiagnoseConfig& config, con
   const diagnose::Candidate& first = d.candidates.front();
   stage.summary = DiagnosisSummary(d, model);
   json_out["summary"] = stage.summary;
+  json_out["findings"] = FindingsJson(RankOneFindings(d, model));
   out << stage.summary << "\n" << d.explanation
             << "\n\n| rank | candidate | parameters | probability | mean |Δf| [%] | mean MAC | score |\n"
             << "|---:|---|---|---:|---:|---:|---:|\n";

@@ -167,33 +167,6 @@ std::string JoinParameters(const std::vector<ParameterView>& parameters, const s
   return out;
 }
 
-// The summary's per-effect lines (app/cmd_diagnose.cpp DiagnosisSummary): "  1. DESCRIPTION — P %
-// over every candidate that holds it (...)", then the values in engineering units, indented deeper.
-struct SummaryEffect {
-  std::string description, values;
-};
-std::map<int, SummaryEffect> SummaryEffects(const std::string& summary) {
-  std::map<int, SummaryEffect> out;
-  std::istringstream lines(summary);
-  static const std::regex effect_line("^(\\s+)([0-9]+)\\. (.*) — [0-9.]+ % over every candidate.*$");
-  int current = -1;
-  size_t indent = 0;
-  for (std::string line; std::getline(lines, line);) {
-    std::smatch m;
-    if (std::regex_match(line, m, effect_line)) {
-      current = std::stoi(m[2]);
-      indent = m[1].length();
-      out[current].description = m[3];
-      continue;
-    }
-    const size_t first = line.find_first_not_of(' ');
-    if (current > 0 && first != std::string::npos && first > indent + 1 && out[current].values.empty())
-      out[current].values = line.substr(first);
-    current = -1;
-  }
-  return out;
-}
-
 const json* RankOne(const json& candidates) {
   const json* best = nullptr;
   for (const json& c : candidates)
@@ -240,7 +213,10 @@ json DiagnosisView(const json& diagnosis) {
                 {"description", Text(first, "description")},
                 {"probability", NumberOrNull(p_first)}};
   const json& effects = first.contains("effects") && first["effects"].is_array() ? first["effects"] : json::array();
-  const std::map<int, SummaryEffect> from_summary = SummaryEffects(Text(diagnosis, "summary"));
+  // Rank 1's effects in words and numbers as `ema diagnose` made them (DIAG.json "findings",
+  // in rank 1's effect order); a DIAG.json written before them: the words made here from the
+  // candidate's own fields.
+  const json& findings = diagnosis.contains("findings") && diagnosis["findings"].is_array() ? diagnosis["findings"] : json::array();
   const std::vector<ParameterView> first_parameters = CandidateParameters(first);
   const json& effect_probabilities =
       diagnosis.contains("effect_probabilities") && diagnosis["effect_probabilities"].is_array()
@@ -257,15 +233,14 @@ json DiagnosisView(const json& diagnosis) {
       if (t == target) p_exact = p;
       else if (t.find('*') != std::string::npos && GlobMatch(t, target) && !(p <= p_any)) p_any = p, pattern = t;
     }
-    auto parsed = from_summary.find(static_cast<int>(i) + 1);
-    std::string description = parsed != from_summary.end() ? parsed->second.description : "";
+    const json* finding = nullptr;
+    for (const json& f : findings)
+      if (f.is_object() && Text(f, "kind") == kind && Text(f, "target") == target) finding = &f;
+    std::string description = finding ? Text(*finding, "description") : "";
     if (description.empty()) description = KindWords(kind) + (target.empty() ? "" : " on '" + target + "'");
-    std::string values = parsed != from_summary.end() ? parsed->second.values : "";
+    std::string values = finding ? Text(*finding, "values") : "";
     if (values.empty()) values = JoinParameters(first_parameters, kind, target);
     if (values.empty() && effects.size() == 1) values = JoinParameters(first_parameters);
-    // The values line gives them in engineering units with σ: the description drops its own
-    // "(E' = 1.68e+11 Pa, R' = 1 mm)".
-    if (!values.empty()) description = std::regex_replace(description, std::regex("\\s*\\([^()]*=[^()]*\\)"), "");
     json e = {{"kind", kind}, {"target", target}, {"description", description}, {"values", values},
               {"probability", NumberOrNull(p_exact)}};
     if (!pattern.empty()) e["any"] = {{"target", pattern}, {"probability", NumberOrNull(p_any)}};

@@ -333,7 +333,7 @@ std::vector<CandidateGroup> GroupCandidates(const std::vector<Candidate>& ranked
   return groups;
 }
 
-std::string DescribeCandidate(const Candidate& c) {
+std::string DescribeCandidate(const Candidate& c, bool with_law_values) {
   if (c.effects.empty()) return "no missing effect";
   std::vector<std::string> parts;
   for (const model::Effect& e : c.effects) {
@@ -347,8 +347,10 @@ std::string DescribeCandidate(const Candidate& c) {
     if (!info) {
       parts.push_back(model::Describe(e));
     } else if (kind == model::EffectKind::kSeriesCompliance && hertz) {
-      parts.push_back("a Hertz contact (E' = " + FormatNumber(hertz->modulus, 3) + " Pa, R' = " +
-                      FormatNumber(hertz->radius * 1e3, 3) + " mm) in series with " + detail::Where(e.target));
+      parts.push_back(with_law_values ? "a Hertz contact (E' = " + FormatNumber(hertz->modulus, 3) + " Pa, R' = " +
+                                            FormatNumber(hertz->radius * 1e3, 3) + " mm) in series with " +
+                                            detail::Where(e.target)
+                                      : "a Hertz contact in series with " + detail::Where(e.target));
     } else if (kind == model::EffectKind::kSeriesCompliance) {
       double k = kNaN;
       if (e.law)

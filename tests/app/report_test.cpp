@@ -263,6 +263,20 @@ json LookAlikeDiagnosis() {
           {"candidates", candidates},
           {"test_modes", 12},
           {"summary", summary},
+          // Rank 1's effects as `ema diagnose` writes them beside the summary (app/cmd_diagnose.cpp
+          // RankOneFindings): the report takes these fields, it parses no text.
+          {"findings",
+           {{{"kind", "series_compliance"}, {"target", "bearings"},
+             {"description", "a Hertz contact in series with group 'bearings'"},
+             {"values", "Hertz contact E' = 168 ± 0.37 GPa (R' = 1 mm); per spring of 'bearings' now: 2.81 N/µm at "
+                        "stud-5um, 1.72 N/µm at stud-9um (the element in series alone: 21.8 N/µm at stud-5um, 20.8 "
+                        "N/µm at stud-9um)"},
+             {"probability", 0.9999999999999997}},
+            {{"kind", "added_mass"}, {"target", "points:111"},
+             {"description", "an added mass of 10.9 g per point at point 111"},
+             {"values", "10.9 ± 2.6 g per point"},
+             {"probability", 0.1483},
+             {"any", {{"target", "points:*"}, {"probability", 0.8954}}}}}},
           {"explanation", "a Hertz contact in series with group 'bearings' together with an added mass at point 111 "
                           "(probability 14.4 %) brings the mean frequency error from 114 % to 0.064 %."},
           {"effect_probabilities", {{{"kind", "series_compliance"}, {"target", "bearings"}, {"probability", 0.9999999999999997}},
@@ -308,6 +322,15 @@ TEST(ReportData, DiagnosisViewFoldsLookAlikesAndTellsTheStory) {
   EXPECT_NEAR(story["effects"][1]["any"]["probability"].get<double>(), 0.8954, 1e-9);
   EXPECT_EQ(story["effects"][1]["description"], "an added mass of 10.9 g per point at point 111");
   EXPECT_EQ(story["effects"][1]["values"], "10.9 ± 2.6 g per point");
+  EXPECT_EQ(story["effects"][0]["description"], "a Hertz contact in series with group 'bearings'");
+  {
+    // The first screen reworded (or gone) changes nothing the report shows: it reads the findings.
+    json reworded = LookAlikeDiagnosis();
+    reworded["summary"] = "Diagnose: 2 effects.\n  1) contact - 100 %\n  2) mass - 15 %\n";
+    EXPECT_EQ(DiagnosisView(reworded)["story"]["effects"], story["effects"]);
+    reworded.erase("summary");
+    EXPECT_EQ(DiagnosisView(reworded)["story"]["effects"], story["effects"]);
+  }
   // Adequacy in words, and where rank 1 still fails (the unpaired mode).
   EXPECT_EQ(story["noise_consistent"], false);
   EXPECT_NE(story["adequacy"].get<std::string>().find("reduced χ² 3.28 × 10⁴ over 12 test modes"), std::string::npos)

@@ -138,6 +138,19 @@ TEST_F(DiagnoseCli, ExactFormLeavesTheModelErrorOut) {
   EXPECT_EQ(none(exact).at("model_error").at("frequency_rel").get<double>(), 0.0);
   EXPECT_EQ(base.at("candidates").at(0).at("target"), exact.at("candidates").at(0).at("target"));
   EXPECT_EQ(base.at("model_error"), base.at("candidates").at(0).at("model_error"));
+  // The first screen's effects as data (DIAG.json findings, docs/diagnose.md): one per effect of
+  // rank 1, its words, the values with σ and per setup per spring, as the summary prints them.
+  const json& first = base.at("candidates").at(0);
+  ASSERT_EQ(base.at("findings").size(), first.at("effects").size());
+  const json& finding = base.at("findings").at(0);
+  EXPECT_EQ(finding.at("kind"), first.at("effects").at(0).at("kind"));
+  EXPECT_EQ(finding.at("target"), "bearings");
+  EXPECT_NE(finding.at("description").get<std::string>().find("in series with group 'bearings'"), std::string::npos)
+      << finding.at("description");
+  EXPECT_NE(finding.at("values").get<std::string>().find("per spring of 'bearings' now:"), std::string::npos)
+      << finding.at("values");
+  EXPECT_GT(finding.at("probability").get<double>(), 0.9);
+  EXPECT_NE(base.at("summary").get<std::string>().find(finding.at("values").get<std::string>()), std::string::npos);
 }
 
 TEST_F(DiagnoseCli, ForceLevelReportsTheAmplitudeTrend) {

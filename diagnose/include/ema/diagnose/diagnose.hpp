@@ -263,8 +263,10 @@ struct Diagnosis {
 Diagnosis Diagnose(const model::Model& model, const std::vector<SetupModes>& tests, const DiagnoseOptions& options = {});
 
 /// The words for one candidate's effect(s), e.g. "a compliance of 6.4 N/µm in series with member
-/// 'J3' of group 'joints'".
-std::string DescribeCandidate(const Candidate& candidate);
+/// 'J3' of group 'joints'". with_law_values = false leaves out a law's constants that the words
+/// would otherwise give in parentheses ("a Hertz contact in series with group 'bearings'"), for
+/// where the values follow in engineering units with their σ.
+std::string DescribeCandidate(const Candidate& candidate, bool with_law_values = true);
 
 /// The JSON parameter key of each of a candidate's parameters: `name` for one effect,
 /// `kind.name` for several (cli.md), `kind.name[target]` when a kind appears twice.
