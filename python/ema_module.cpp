@@ -85,19 +85,40 @@ py::list DofList(const std::vector<Dof>& dofs) {
   return out;
 }
 
+// A direction code is ±1..±6 (X, Y, Z, RX, RY, RZ); anything else is refused with the DOF's text.
+int CheckedDirection(int dir, const std::string& what) {
+  if (dir == 0 || dir < -6 || dir > 6)
+    throw py::value_error(what + ": unknown direction (expected one of +X +Y +Z +RX +RY +RZ, with + or -)");
+  return dir;
+}
+
 Dof ToDof(const py::handle& h) {
   if (py::isinstance<py::str>(h)) {
     const std::string t = h.cast<std::string>();
     const auto split = t.find_first_of("+-", 1);
     if (split == std::string::npos) throw py::value_error("DOF '" + t + "': expected e.g. '1+Z'");
-    const int dir = ema::ParseDirection(t.substr(split));
-    if (dir == 0) throw py::value_error("DOF '" + t + "': unknown direction");
-    return {std::stoi(t.substr(0, split)), dir};
+    const int dir = CheckedDirection(ema::ParseDirection(t.substr(split)), "DOF '" + t + "'");
+    int node = 0;
+    try {
+      size_t used = 0;
+      node = std::stoi(t.substr(0, split), &used);
+      if (used != split) throw std::invalid_argument(t);
+    } catch (const std::exception&) {
+      throw py::value_error("DOF '" + t + "': expected a node number before the direction, e.g. '1+Z'");
+    }
+    return {node, dir};
   }
+  if (!py::isinstance<py::sequence>(h))
+    throw py::type_error("DOF: expected '1+Z' or (node, '+Z'), got " + std::string(py::str(py::type::of(h).attr("__name__"))));
   const auto t = h.cast<py::sequence>();
   if (t.size() != 2) throw py::value_error("DOF: expected (node, '+Z')");
-  const int dir = py::isinstance<py::str>(t[1]) ? ema::ParseDirection(t[1].cast<std::string>()) : t[1].cast<int>();
-  return {t[0].cast<int>(), dir};
+  if (!py::isinstance<py::int_>(t[0])) throw py::type_error("DOF: the node must be an int, as in (101, '+Z')");
+  const std::string what = "DOF (" + std::string(py::str(t[0])) + ", " + std::string(py::repr(t[1])) + ")";
+  int dir = 0;
+  if (py::isinstance<py::str>(t[1])) dir = ema::ParseDirection(t[1].cast<std::string>());
+  else if (py::isinstance<py::int_>(t[1])) dir = t[1].cast<int>();
+  else throw py::type_error(what + ": the direction must be '+Z' or a code ±1..±6");
+  return {t[0].cast<int>(), CheckedDirection(dir, what)};
 }
 
 std::string QuantityName(ema::Quantity q) {
@@ -150,6 +171,15 @@ FrfSet ToFrfSet(const py::object& o) {
   s.frequency_hz = Eigen::Map<const Eigen::VectorXd>(f.data(), f.size());
   for (auto h : d["outputs"].cast<py::sequence>()) s.outputs.push_back(ToDof(h));
   for (auto h : d["references"].cast<py::sequence>()) s.references.push_back(ToDof(h));
+  // Complex FRFs only: a real array (magnitudes, or real parts alone) would be taken as FRFs with
+  // no phase and fit to nonsense without a word.
+  if (!d.contains("h")) throw py::value_error("frfs: expected a dict with 'h' (complex, references × lines × outputs)");
+  {
+    const py::array raw = py::array::ensure(d["h"]);
+    if (!raw || raw.dtype().kind() != 'c')
+      throw py::type_error("frfs['h']: expected a complex array (references, lines, outputs), got dtype " +
+                           (raw ? std::string(py::str(raw.dtype())) : std::string("none")));
+  }
   const auto h = py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>(d["h"]);
   if (h.ndim() != 3 || h.shape(0) != s.ReferenceCount() || h.shape(1) != s.LineCount() || h.shape(2) != s.OutputCount())
     throw py::value_error("frfs['h']: expected shape (references, lines, outputs)");
@@ -430,7 +460,14 @@ ModeSet ToModeSet(const py::object& o, const std::string& label = "modes") {
 
 std::pair<double, double> Band(const py::object& band) {
   if (band.is_none()) return {0.0, 0.0};
-  const auto t = band.cast<std::pair<double, double>>();
+  if (!py::isinstance<py::sequence>(band) || py::isinstance<py::str>(band) || py::len(band) != 2)
+    throw py::type_error("band: expected (lo, hi) in Hz or None, got " + std::string(py::repr(band)));
+  std::pair<double, double> t;
+  try {
+    t = band.cast<std::pair<double, double>>();
+  } catch (const py::cast_error&) {
+    throw py::type_error("band: expected two numbers (lo, hi) in Hz, got " + std::string(py::repr(band)));
+  }
   if (!(t.second > t.first) || t.first < 0.0) throw py::value_error("band: expected (lo, hi) with 0 <= lo < hi");
   return t;
 }
@@ -812,6 +849,19 @@ PYBIND11_MODULE(_ema, m) {
           py::gil_scoped_release release;
           fit = ema::curvefit::Fit(set, opt, "frfs");
         }
+        // As `ema fit` exits 1: a fit that finds nothing is an error, not an empty result.
+        if (fit.modes.modes.empty())
+          throw py::value_error(
+              "fit: no mode found" +
+              std::string(method == "peak" ? ": no resonance peak in the band (try another band)"
+                                           : ": no pole stayed stable over the PolyMAX orders " +
+                                                 std::to_string(fit.diagram.order_min) + "–" +
+                                                 std::to_string(fit.diagram.order_max) +
+                                                 " (try a wider band or a higher order_max; an all-zero FRF has none)"));
+        // Each warning through Python's warnings (filterable, and an error under -W error); the
+        // list stays in the result for scripts that read it.
+        for (const std::string& w : fit.warnings)
+          if (PyErr_WarnEx(PyExc_RuntimeWarning, ("ema.fit: " + w).c_str(), 1) != 0) throw py::error_already_set();
         py::dict d = ModesDict(fit.modes);
         d["synthesis_error"] = fit.synthesis_error;
         d["reciprocity_transposed"] = fit.transposed;
@@ -833,7 +883,10 @@ PYBIND11_MODULE(_ema, m) {
       "and the maximum-likelihood refinement (refine='ml', the default; 'none' keeps PolyMAX/LSFD) with the\n"
       "1-sigma frequency_std_hz and damping_ratio_std. band=(lo, hi) in Hz. Returns a modes dict plus\n"
       "synthesis_error, order and cluster_orders (and roving_sets/reference when the FRFs know them).\n"
-      "The result goes straight into correlate() and diagnose() (the sigmas weigh each mode there).");
+      "The result goes straight into correlate() and diagnose() (the sigmas weigh each mode there).\n"
+      "Raises ValueError when no mode is found (as `ema fit` exits 1), for an unknown direction or a bad band,\n"
+      "TypeError for a real-valued 'h' or a band that is not (lo, hi); each fit warning is also issued\n"
+      "through warnings.warn (RuntimeWarning) and kept in the result's 'warnings'.");
 
   m.def(
       "mode_indicators",

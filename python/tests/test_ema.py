@@ -155,3 +155,52 @@ def test_bad_input_raises_with_the_file_name(tmp):
     with pytest.raises(ValueError):
         ema.fit({"frequency_hz": [1.0, 2.0], "outputs": [(1, "+Z")], "references": [(1, "+Z")],
                  "h": np.zeros((2, 2, 1), dtype=complex)})
+
+
+def _two_mode_frfs():
+    """Two-mode accelerance at 40 and 120 Hz, driving point 1/1 and transfer 2/1 (analytic)."""
+    f = np.arange(0.0, 200.0, 0.5)
+    w = 2 * np.pi * f
+    h = np.zeros((1, len(f), 2), dtype=complex)
+    for fn, zeta, phi in [(40.0, 0.01, (1.0, 0.8)), (120.0, 0.02, (1.0, -0.6))]:
+        wn = 2 * np.pi * fn
+        rec = 1.0 / (wn**2 - w**2 + 2j * zeta * wn * w)
+        h[0, :, 0] += -(w**2) * phi[0] * phi[0] * rec
+        h[0, :, 1] += -(w**2) * phi[1] * phi[0] * rec
+    return {"frequency_hz": f, "outputs": [(1, "+Z"), (2, "+Z")], "references": [(1, "+Z")], "h": h}
+
+
+def test_fit_finds_the_analytic_poles():
+    # The control for the refusals below: the same FRFs fit to their two poles.
+    py = ema.fit(_two_mode_frfs(), band=(10.0, 190.0))
+    np.testing.assert_allclose(sorted(py["frequency_hz"]), [40.0, 120.0], rtol=1e-3)
+
+
+def test_fit_that_finds_nothing_raises_as_the_cli_exits():
+    # issue 41: these returned zero modes without a word (the CLI exits 1 there).
+    frfs = _two_mode_frfs()
+    with pytest.raises(ValueError, match="no mode found"):
+        ema.fit(frfs, band=(60.0, 61.0))
+    with pytest.raises(ValueError, match="no mode found"):
+        ema.fit(frfs, band=(10.0, 190.0), order_max=2)
+    zero = dict(frfs, h=np.zeros_like(frfs["h"]))
+    with pytest.raises(ValueError, match="no mode found"):
+        ema.fit(zero, band=(10.0, 190.0))
+
+
+def test_bindings_refuse_wrong_types_with_the_argument_named():
+    frfs = _two_mode_frfs()
+    with pytest.raises(ValueError, match="unknown direction"):
+        ema.fit(dict(frfs, outputs=[(1, "+Q"), (2, "+Z")]))
+    with pytest.raises(ValueError, match="unknown direction"):
+        ema.fit(dict(frfs, outputs=[(1, 9), (2, "+Z")]))
+    with pytest.raises(ValueError, match="node number"):
+        ema.fit(dict(frfs, outputs=["a+Z", "2+Z"]))
+    with pytest.raises(TypeError, match=r"frfs\['h'\]: expected a complex array"):
+        ema.fit(dict(frfs, h=np.abs(frfs["h"])))
+    with pytest.raises(TypeError, match="band"):
+        ema.fit(frfs, band=100)
+    with pytest.raises(TypeError, match="band"):
+        ema.fit(frfs, band=("a", "b"))
+    with pytest.raises(ValueError, match="band"):
+        ema.fit(frfs, band=(100.0, 50.0))
