@@ -2,10 +2,12 @@
 # From a fresh clone to results. Usage:
 #   scripts/quickstart.sh             install what is missing, build, run the main job on the sample
 #   scripts/quickstart.sh --test      install what is missing, build, run the whole test suite, then
-#                                     the sanitizer suite with the fuzz smoke runs (--sanitize below)
-#   scripts/quickstart.sh --sanitize  only the sanitizer suite: build-asan/ (ASan + UBSan, leaks
-#                                     checked, no recovery; the fuzz targets too when clang is
-#                                     installed) and its ctest run (docs/reliability.md)
+#                                     the input-handling modules' tests under the sanitizers with the
+#                                     fuzz smoke runs (what CI runs: .ci/run)
+#   scripts/quickstart.sh --sanitize  the whole suite under the sanitizers: build-asan/ (ASan + UBSan,
+#                                     leaks checked, no recovery; the fuzz targets too when clang is
+#                                     installed) and its ctest run (docs/reliability.md) — before
+#                                     landing a change to memory-heavy code
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode="${1:-}"
@@ -29,11 +31,21 @@ fi
 
 # The sanitizer suite, in one tree that also builds the parsers' libFuzzer targets (clang, when
 # installed: ASan + UBSan on every target, the libraries at -O2 and the rest at -O1, the parsers
-# instrumented for coverage; docs/reliability.md "CI time"). Every test runs but the packaging
-# check (it installs and rebuilds a consumer, no ema code runs), the headless-Chromium checks
-# (Chromium itself is not built with ASan) and the diagnosis benchmark's 25 cases (the same chain
-# as the guideway and acceptance tests, which do run under ASan); then each fuzz target's smoke run.
+# instrumented for coverage; docs/reliability.md "CI time").
+#   sanitize all    every test but the packaging check (it installs and rebuilds a consumer, no
+#                   ema code runs), the headless-Chromium checks (Chromium itself is not built with
+#                   ASan) and the diagnosis benchmark's cases (the same chain as the guideway and
+#                   acceptance tests, which do run under ASan); then each fuzz target's smoke run.
+#   sanitize input  (the test command, CI) the modules that read files and own the buffers — core,
+#                   acquisition, frf, model, formats — the CLI's bad-input corpus (app/Corpus,
+#                   every file of tests/badinput through `ema`), outputs-spare-inputs, resource
+#                   limits and the fuzz smoke runs: what untrusted input reaches. The numerics' and the app's
+#                   tests under the sanitizers (the slowest: a diagnosis runs ten times slower
+#                   there) are --sanitize's, run before landing memory-heavy changes; with them
+#                   the test command took 40 min in CI (2026-11-27), twice its 20-min budget.
 sanitize() {
+  local scope="$1"
+
   local compiler=() fuzz=(-DEMA_BUILD_FUZZ=OFF)
   if command -v clang++ >/dev/null 2>&1; then
     compiler=(-DCMAKE_CXX_COMPILER=clang++)
@@ -52,14 +64,28 @@ sanitize() {
   fi
   step "sanitizer configure" cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Release -DEMA_SANITIZE=ON -DEMA_BUILD_BENCH=OFF \
         "${compiler[@]}" "${fuzz[@]}" "${launcher[@]}" >/dev/null
-  step "sanitizer build" cmake --build build-asan -j"${jobs}"
-  step "sanitizer suite" ctest --test-dir build-asan --output-on-failure -j"${jobs}" --timeout 1800 \
-       -E 'packaging/|Chromium|diagnosis-benchmark/'
+  if [[ "${scope}" == "input" ]]; then
+    local modules=(core acquisition frf model formats) targets=(ema test_app)
+    for m in "${modules[@]}"; do targets+=("test_${m}"); done
+    if ((${#compiler[@]})); then
+      for t in uff_reader csv matrix_market model_file project_file plan_file json_results json_modes_roundtrip; do
+        targets+=("fuzz_${t}")
+      done
+    fi
+    step "sanitizer build (input modules)" cmake --build build-asan -j"${jobs}" --target "${targets[@]}"
+    step "sanitizer suite (input modules)" ctest --test-dir build-asan --output-on-failure -j"${jobs}" --timeout 1800 \
+         -R "^($(IFS='|'; echo "${modules[*]}")|fuzz|app/(Corpus|BadInputTable|OutputsSpareInputs|Resources|ConvergenceExit))[/.]" \
+         -E 'Chromium'
+  else
+    step "sanitizer build" cmake --build build-asan -j"${jobs}"
+    step "sanitizer suite" ctest --test-dir build-asan --output-on-failure -j"${jobs}" --timeout 1800 \
+         -E 'packaging/|Chromium|diagnosis-benchmark/'
+  fi
 }
 
 if [[ "${mode}" == "--sanitize" ]]; then
   step "install" bash scripts/install-deps.sh --test
-  sanitize
+  sanitize all
   exit 0
 fi
 step "install" bash scripts/install-deps.sh ${mode}
@@ -73,7 +99,7 @@ step "configure" cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${extra[@]}" "$
 step "build" cmake --build build -j"${jobs}"
 if [[ "${mode}" == "--test" ]]; then
   step "suite" ctest --test-dir build --output-on-failure -j"${jobs}" --timeout 900
-  sanitize
+  sanitize input
 else
   bash scripts/main-job.sh
 fi
