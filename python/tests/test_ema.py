@@ -113,15 +113,8 @@ def test_quality_matches_cli(beam_fit, tmp):
 
 def test_quality_on_arrays_finds_the_inverted_driving_point():
     # Two-mode accelerance (e^{+jwt}), driving point 1/1 and transfer 2/1; Im(A_11) >= 0 when passive.
-    f = np.arange(0.0, 200.0, 0.5)
-    w = 2 * np.pi * f
-    h = np.zeros((1, len(f), 2), dtype=complex)
-    for fn, zeta, phi in [(40.0, 0.01, (1.0, 0.8)), (120.0, 0.02, (1.0, -0.6))]:
-        wn = 2 * np.pi * fn
-        rec = 1.0 / (wn**2 - w**2 + 2j * zeta * wn * w)
-        h[0, :, 0] += -(w**2) * phi[0] * phi[0] * rec
-        h[0, :, 1] += -(w**2) * phi[1] * phi[0] * rec
-    frfs = {"frequency_hz": f, "outputs": [(1, "+Z"), (2, "+Z")], "references": [(1, "+Z")], "h": h}
+    frfs = _two_mode_frfs()
+    h = frfs["h"]
     good = ema.quality(frfs)
     assert good["driving_points"][0]["verdict"] == "pass"
     assert good["driving_points"][0]["resonances"] == 2
