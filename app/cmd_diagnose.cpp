@@ -162,18 +162,24 @@ void InadequateModelWords(const diagnose::Diagnosis& d, std::ostringstream* out)
   if (!where.empty()) *out << "  Where the misfit sits (rank 1, in the test's σ): " << where << ".\n";
   // Which kinds of missing physics fit the pattern.
   int above = 0, below = 0, paired = 0;
-  double frequency2 = 0.0, shape2 = 0.0;
+  double frequency2 = 0.0, shape2 = 0.0, frequency_sum = 0.0;
   for (const auto& m : first.modes) {
     if (m.model_mode < 0) continue;
     ++paired;
     if (m.frequency_misfit_sigma > 1.0) ++above;
     if (m.frequency_misfit_sigma < -1.0) ++below;
+    frequency_sum += m.frequency_misfit_sigma;
     frequency2 += m.frequency_misfit_sigma * m.frequency_misfit_sigma;
     shape2 += m.shape_misfit_sigma * m.shape_misfit_sigma;
   }
   std::vector<std::string> kinds;
-  if (paired > 0 && (above == paired || below == paired))
-    kinds.push_back(std::string("distributed ") + (above == paired ? "stiffness too high or mass too low" : "stiffness too low or mass too high") +
+  // Every mode off the same way, or the error the modes share inferred at least as large as the
+  // one of each (DIAG.json model_error.frequency_common_rel): a distributed error of the model.
+  const bool together = (paired > 0 && (above == paired || below == paired)) ||
+                        (paired > 1 && first.model_error.frequency_common_rel >= first.model_error.frequency_rel);
+  if (together)
+    kinds.push_back(std::string("distributed ") +
+                    (frequency_sum > 0.0 ? "stiffness too high or mass too low" : "stiffness too low or mass too high") +
                     " everywhere (a material property, a spread non-structural mass)");
   else if (above > 0 && below > 0)
     kinds.push_back("stiffness or mass distributed differently from the model (zone-wise scatter, a boundary the model fixes or frees)");
@@ -255,8 +261,15 @@ std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& m
   };
   if (!first.noise_consistent && first.model_error.dominates) InadequateModelWords(d, &out);
   if (first.effects.empty()) {
-    out << "Diagnosis: no missing effect found (probability " << Percent(first.probability)
-        << "): no candidate explains the mismatch by more than its prior and parameter cost.\n";
+    if (!first.noise_consistent && first.model_error.dominates)
+      // Not "nothing is missing": something is, but none of the vocabulary's effects explains it
+      // beyond the model's own error.
+      out << "Diagnosis: no effect the model can try explains the mismatch beyond the model's own error (the model "
+             "as given ranks first, probability "
+          << Percent(first.probability) << "); what is missing is outside the vocabulary.\n";
+    else
+      out << "Diagnosis: no missing effect found (probability " << Percent(first.probability)
+          << "): no candidate explains the mismatch by more than its prior and parameter cost.\n";
     out << "  Mean frequency error " << FixedPoint(first.mean_abs_frequency_error_pct, 2) << " %, mean MAC "
         << FixedPoint(first.mean_mac, 3) << ".\n";
     adequacy(first);

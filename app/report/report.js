@@ -143,7 +143,11 @@
       var st = el('div', { 'class': 'story', id: 'diagnosis-story' });
       fs0.appendChild(st);
       var n = story.effects.length;
+      // No effect, and the model still inadequate with its own error dominating: something is
+      // missing that the vocabulary cannot say — never "nothing is missing".
+      var outside = !n && story.noise_consistent === false && story.model_error_note;
       st.appendChild(el('h2', { text: n ? 'Diagnosis: the model misses ' + n + ' effect' + (n > 1 ? 's' : '') :
+        outside ? 'Diagnosis: no effect the model can try explains the mismatch beyond its own error' :
         'Diagnosis: no missing effect found' }));
       st.appendChild(el('p', { 'class': 'lead', text: n ?
         'Rank 1 of ' + view.candidate_count + ' candidates (probability ' + pct(story.probability) + ' for this exact ' +
