@@ -353,6 +353,9 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
       "exact-form", po::bool_switch(&exact_form),
       "take the model's form as exact: no model error in the likelihood (docs/diagnose.md \"Model error\"; "
       "for comparison with diagnoses made before it)")(
+      "effect-prior-odds", po::value(&dopt.effect_prior_odds)->default_value(dopt.effect_prior_odds),
+      "prior odds of one more missing effect against one fewer, on top of the ln N of being one of N candidates "
+      "(0 < odds <= 1; 1: only the ln N; docs/diagnose.md \"Model error\")")(
       "shape-weight", po::value(&shape_weight), "old form of --shape-sigma: shape σ = 0.001 / weight")(
       "mac-min", po::value(&dopt.pairing.mac_min)->default_value(dopt.pairing.mac_min), "minimum MAC of a pair while fitting")(
       "sensor-mass", po::value(&config.sensor_mass)->default_value(config.sensor_mass),

@@ -142,6 +142,8 @@ def diagnose(
     shape_sigma: float = 0.01,
     mac_min: float = 0.5,
     sensor_mass: float = 0.0,
+    effect_prior_odds: float = 0.25,
+    exact_form: bool = False,
 ) -> dict[str, Any]:
     """Which physical effect is the model missing, where, and how sure? As `ema diagnose`; returns
     DIAG.json's layout ('candidates' ranked, rank 1 first)."""

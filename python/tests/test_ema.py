@@ -197,3 +197,12 @@ def test_bindings_refuse_wrong_types_with_the_argument_named():
         ema.fit(frfs, band=("a", "b"))
     with pytest.raises(ValueError, match="band"):
         ema.fit(frfs, band=(100.0, 50.0))
+
+
+def test_diagnose_takes_the_model_error_options():
+    # --effect-prior-odds and --exact-form as keywords, validated as the CLI validates them.
+    model = SOURCE / "samples" / "guideway" / "model.toml"
+    modes = {"modes": [{"frequency_hz": 200.0, "frequency_std_hz": 0.2, "damping_ratio": 0.01,
+                        "shape": [{"node": 1, "dir": "+Z", "value": 1.0}]}]}
+    with pytest.raises(ValueError, match="effect_prior_odds"):
+        ema.diagnose(str(model), {"stud-5um": modes}, effect_prior_odds=0.0)

@@ -153,6 +153,33 @@ TEST_F(DiagnoseCli, ExactFormLeavesTheModelErrorOut) {
   EXPECT_NE(base.at("summary").get<std::string>().find(finding.at("values").get<std::string>()), std::string::npos);
 }
 
+TEST_F(DiagnoseCli, EffectPriorOddsIsAnOptionThatValidatesItself) {
+  // --effect-prior-odds (DiagnoseOptions::effect_prior_odds, docs/diagnose.md "Model error"): the
+  // default 0.25 and a given value reach DIAG.json's options; each effect's evidence moves by
+  // ln(odds ratio) per effect, so rank 1's probability (one effect) moves and its reading does not
+  // (the mount compliance fits the guideway far beyond any prior); outside (0, 1] is bad usage.
+  const json base = Diagnose("odds-default", "--max-effects 1");
+  const json even = Diagnose("odds-even", "--max-effects 1 --effect-prior-odds 1");
+  EXPECT_DOUBLE_EQ(base.at("options").at("effect_prior_odds").get<double>(), 0.25);
+  EXPECT_DOUBLE_EQ(even.at("options").at("effect_prior_odds").get<double>(), 1.0);
+  EXPECT_EQ(base.at("candidates").at(0).at("target"), even.at("candidates").at(0).at("target"));
+  auto log_evidence = [](const json& d, const std::string& kind) {
+    for (const auto& c : d.at("candidates"))
+      if (c.at("kind") == kind) return c.at("log_evidence").get<double>();
+    return std::nan("");
+  };
+  // "none" holds no effect: its evidence is the same; a one-effect reading gains ln 4.
+  EXPECT_NEAR(log_evidence(even, "none"), log_evidence(base, "none"), 1e-9);
+  const std::string kind = base.at("candidates").at(0).at("kind");
+  EXPECT_NEAR(log_evidence(even, kind) - log_evidence(base, kind), std::log(4.0), 1e-6);
+  for (const char* bad : {"0", "1.5", "-1"})
+    EXPECT_EQ(RunEma(*dir_, "diagnose \"" + (kSample / "model.toml").string() + "\" --test \"" +
+                                (*run_ / "stud-5um/modes.unv").string() + "\" --effect-prior-odds " + bad,
+                     std::string("odds-") + bad + ".log"),
+              2)
+        << bad;
+}
+
 TEST_F(DiagnoseCli, ForceLevelReportsTheAmplitudeTrend) {
   // Three levels built from the stud-5um modes with every frequency lowered by 0 %, 0.5 % and
   // 1 % (and damping unchanged): each mode is "softening" with a change of −1 % from the lowest
