@@ -833,7 +833,7 @@ PYBIND11_MODULE(_ema, m) {
   m.def(
       "fit",
       [](const py::object& frfs, const py::object& band, int order_max, const std::vector<double>& select,
-         const std::string& method, const std::string& refine) {
+         const std::string& method, const std::string& refine, bool stabilisation) {
         const FrfSet set = ToFrfSet(frfs);
         ema::curvefit::FitOptions opt;
         std::tie(opt.data.band_lo_hz, opt.data.band_hi_hz) = Band(band);
@@ -874,10 +874,23 @@ PYBIND11_MODULE(_ema, m) {
         const nlohmann::json sets = ema::formats::TestSetsJson(set);
         if (sets.contains("roving_sets")) d["roving_sets"] = FromJson(sets["roving_sets"]);
         if (sets.contains("reference")) d["reference"] = DofTuple(set.references[0]);
+        if (stabilisation) {
+          // Why each mode is there and why others are not: the diagram as `ema fit --stabilisation`
+          // writes it (poles per order with their stability), the modal model behind the shapes
+          // (poles, residues and residual terms per measured FRF) and the dropped poles with reasons,
+          // as `ema fit --json` gives them.
+          const nlohmann::json fit_json = ema::formats::FitModesJson(fit, opt.refine);
+          d["stabilisation"] = opt.method == ema::curvefit::FitMethod::kPeak
+                                   ? py::object(py::none())
+                                   : FromJson(ema::formats::StabilisationJson(fit, opt.stability));
+          d["modal_model"] = fit_json.contains("modal_model") ? FromJson(fit_json["modal_model"]) : py::object(py::none());
+          d["dropped"] = fit_json.contains("dropped") ? FromJson(fit_json["dropped"]) : FromJson(nlohmann::json::array());
+        }
         return d;
       },
       py::arg("frfs"), py::arg("band") = py::none(), py::arg("order_max") = 0,
       py::arg("select") = std::vector<double>{}, py::arg("method") = "polymax", py::arg("refine") = "ml",
+      py::arg("stabilisation") = false,
       "Fits modes to FRFs as `ema fit`: PolyMAX poles for every order up to order_max (0 = automatic),\n"
       "stabilisation, automatic selection (or the poles nearest the frequencies in `select`), LSFD shapes,\n"
       "and the maximum-likelihood refinement (refine='ml', the default; 'none' keeps PolyMAX/LSFD) with the\n"
@@ -886,7 +899,10 @@ PYBIND11_MODULE(_ema, m) {
       "The result goes straight into correlate() and diagnose() (the sigmas weigh each mode there).\n"
       "Raises ValueError when no mode is found (as `ema fit` exits 1), for an unknown direction or a bad band,\n"
       "TypeError for a real-valued 'h' or a band that is not (lo, hi); each fit warning is also issued\n"
-      "through warnings.warn (RuntimeWarning) and kept in the result's 'warnings'.");
+      "through warnings.warn (RuntimeWarning) and kept in the result's 'warnings'.\n"
+      "stabilisation=True adds 'stabilisation' (the diagram as `ema fit --stabilisation` writes it: poles per\n"
+      "order with their stability), 'modal_model' (poles, residues and residual terms per measured FRF, as in\n"
+      "`ema fit --json`) and 'dropped' (poles the fit dropped, each with its reason).");
 
   m.def(
       "mode_indicators",

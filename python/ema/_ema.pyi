@@ -115,6 +115,7 @@ def fit(
     select: Sequence[float] = ...,
     method: Literal["polymax", "peak"] = "polymax",
     refine: Literal["ml", "none"] = "ml",
+    stabilisation: bool = False,
 ) -> ModesDict:
     """Fits modes to FRFs as `ema fit` (PolyMAX, stabilisation, selection, LSFD, ML refinement with 1 sigma)."""
 

@@ -71,6 +71,23 @@ def test_mode_indicators_match_the_stabilisation_json(beam_fit):
     assert mi["mmif"][:, 0].tolist() == stab["mmif"]["values"][0]
 
 
+def test_fit_returns_the_stabilisation_and_the_modal_model_of_the_cli(beam_fit):
+    # issue 41: why a mode is there (or not) and the model behind the shapes, as `ema fit
+    # --stabilisation` and `--json` write them: the same poles per order, the same residues.
+    sample, d = beam_fit
+    stab = load_json(d / "stab.json")
+    cli = load_json(d / "modes.json")
+    py = ema.fit(str(sample), band=(30.0, 300.0), order_max=40, stabilisation=True)
+    plain = {k: v for k, v in stab.items() if k not in ("cmif", "mmif")}  # mode_indicators() gives those
+    assert set(plain) <= set(py["stabilisation"])
+    for key in plain:
+        assert py["stabilisation"][key] == plain[key], key
+    assert py["modal_model"] == cli["modal_model"]
+    assert len(py["modal_model"]["poles"]) == len(py["frequency_hz"]) == 3
+    assert py["dropped"] == cli.get("dropped", [])
+    assert "stabilisation" not in ema.fit(str(sample), band=(30.0, 300.0), order_max=40)
+
+
 def test_correlate_matches_cli(beam_fit, tmp):
     sample, d = beam_fit
     # A second fit (another band and order) against the first: a non-trivial pairing.
