@@ -905,6 +905,94 @@ PYBIND11_MODULE(_ema, m) {
       "`ema fit --json`) and 'dropped' (poles the fit dropped, each with its reason).");
 
   m.def(
+      "synthesize",
+      [](const py::object& fit_result, const py::object& frequency_hz) {
+        // The modal model as ema.fit(..., stabilisation=True) returns it (or that dict's
+        // 'modal_model' alone): poles as the FRFs carry them, residues and residual terms per
+        // measured FRF (`ema fit --json`'s modal_model).
+        if (!IsMapping(fit_result)) throw py::type_error("synthesize: fit_result must be what ema.fit(..., stabilisation=True) returns");
+        py::dict given = py::reinterpret_borrow<py::dict>(fit_result);
+        if (given.contains("modal_model")) {
+          if (given["modal_model"].is_none())
+            throw py::value_error("synthesize: this fit has no modal model (the peak method, or no mode)");
+          given = py::reinterpret_borrow<py::dict>(given["modal_model"]);
+        } else if (!given.contains("poles") || !given.contains("frfs")) {
+          throw py::value_error("synthesize: fit_result has no 'modal_model': fit with stabilisation=True");
+        }
+        const nlohmann::json j = nlohmann::json::parse(py::module_::import("json").attr("dumps")(given).cast<std::string>());
+        const auto f = py::array_t<double, py::array::c_style | py::array::forcecast>(frequency_hz);
+        if (f.ndim() != 1 || f.size() == 0) throw py::value_error("synthesize: frequency_hz must be a 1-D array of Hz");
+        const Eigen::VectorXd hz = Eigen::Map<const Eigen::VectorXd>(f.data(), f.size());
+        ema::curvefit::ModalModel mm;
+        const std::string type = j.value("frf_type", "accelerance");
+        mm.frf_type = type == "receptance" ? ema::FrfType::kReceptance
+                      : type == "mobility" ? ema::FrfType::kMobility
+                                           : ema::FrfType::kAccelerance;
+        const auto band = j.value("band_hz", std::vector<double>{0.0, 0.0});
+        if (band.size() == 2) mm.band_lo_hz = band[0], mm.band_hi_hz = band[1];
+        for (const auto& p : j.at("poles")) mm.poles_fitted.emplace_back(p.at(0).get<double>(), p.at(1).get<double>());
+        auto dof = [](const nlohmann::json& e, const char* node, const char* dir) {
+          const int d = ema::ParseDirection(e.at(dir).get<std::string>());
+          if (d == 0) throw py::value_error("synthesize: modal_model: unknown direction " + e.at(dir).dump());
+          return Dof{e.at(node).get<int>(), d};
+        };
+        auto index_of = [](std::vector<Dof>* list, const Dof& d) {
+          for (size_t i = 0; i < list->size(); ++i)
+            if ((*list)[i] == d) return static_cast<int>(i);
+          list->push_back(d);
+          return static_cast<int>(list->size()) - 1;
+        };
+        struct Entry { int o, i; const nlohmann::json* frf; };
+        std::vector<Entry> entries;
+        for (const auto& frf : j.at("frfs"))
+          entries.push_back({index_of(&mm.outputs, dof(frf, "response_node", "response_dir")),
+                             index_of(&mm.references, dof(frf, "reference_node", "reference_dir")), &frf});
+        const int l = static_cast<int>(mm.outputs.size()), m = static_cast<int>(mm.references.size());
+        const int n = static_cast<int>(mm.poles_fitted.size());
+        mm.residues = Eigen::MatrixXcd::Zero(l * m, n);
+        mm.lower_residual = Eigen::VectorXd::Zero(l * m);
+        mm.upper_residual = Eigen::VectorXd::Zero(l * m);
+        std::vector<bool> held(static_cast<size_t>(l * m), false);
+        for (const Entry& e : entries) {
+          const int c = e.o * m + e.i;
+          const auto& residues = e.frf->at("residues");
+          if (static_cast<int>(residues.size()) != n)
+            throw py::value_error("synthesize: modal_model: each FRF needs one residue per pole (" + std::to_string(n) + ")");
+          for (int r = 0; r < n; ++r) mm.residues(c, r) = {residues[r].at(0).get<double>(), residues[r].at(1).get<double>()};
+          mm.lower_residual(c) = e.frf->value("lower_residual", 0.0);
+          mm.upper_residual(c) = e.frf->value("upper_residual", 0.0);
+          held[static_cast<size_t>(c)] = true;
+        }
+        // (references, lines, outputs) as every FRF dict; NaN for an FRF the model does not hold
+        // and outside the band it was fitted in (nothing is extrapolated).
+        py::array_t<std::complex<double>> h({static_cast<py::ssize_t>(m), static_cast<py::ssize_t>(hz.size()),
+                                             static_cast<py::ssize_t>(l)});
+        auto hr = h.mutable_unchecked<3>();
+        const std::complex<double> nan(std::nan(""), std::nan(""));
+        for (int o = 0; o < l; ++o)
+          for (int i = 0; i < m; ++i) {
+            const bool have = held[static_cast<size_t>(o * m + i)];
+            const Eigen::VectorXcd v = have ? ema::curvefit::SynthesiseFrf(mm, o, i, hz) : Eigen::VectorXcd();
+            for (Eigen::Index k = 0; k < hz.size(); ++k) {
+              const bool inside = !(mm.band_hi_hz > mm.band_lo_hz) || (hz(k) >= mm.band_lo_hz && hz(k) <= mm.band_hi_hz);
+              hr(i, k, o) = have && inside ? v(k) : nan;
+            }
+          }
+        py::dict d;
+        d["frequency_hz"] = Vec(hz);
+        d["outputs"] = DofList(mm.outputs);
+        d["references"] = DofList(mm.references);
+        d["h"] = h;
+        d["quantity"] = type == "receptance" ? "displacement" : type == "mobility" ? "velocity" : "acceleration";
+        return d;
+      },
+      py::arg("fit_result"), py::arg("frequency_hz"),
+      "FRFs of a fitted modal model: what ema.fit(..., stabilisation=True) returns (or its 'modal_model'),\n"
+      "evaluated at frequency_hz (1-D, Hz) — the synthesis a fit is judged by. Returns an FRF dict\n"
+      "(frequency_hz, outputs, references, h of shape (references, lines, outputs)) for the measured FRFs the\n"
+      "model holds; NaN outside the band it was fitted in and for FRFs it does not hold.");
+
+  m.def(
       "mode_indicators",
       [](const py::object& frfs, const py::object& band) {
         ema::curvefit::FitDataOptions opt;

@@ -24,6 +24,7 @@ from ._ema import (
     quality,
     read_frfs,
     read_modes,
+    synthesize,
 )
 
 __doc__ = (_ema.__doc__ or "") + "\n\n" + __doc__.split("\n\n", 1)[1]
@@ -42,4 +43,5 @@ __all__ = [
     "quality",
     "read_frfs",
     "read_modes",
+    "synthesize",
 ]

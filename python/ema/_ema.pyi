@@ -119,6 +119,10 @@ def fit(
 ) -> ModesDict:
     """Fits modes to FRFs as `ema fit` (PolyMAX, stabilisation, selection, LSFD, ML refinement with 1 sigma)."""
 
+def synthesize(fit_result: Mapping[str, Any], frequency_hz: npt.ArrayLike) -> FrfDict:
+    """FRFs of a fitted modal model (ema.fit(..., stabilisation=True)) at frequency_hz: the synthesis a
+    fit is judged by; NaN outside the fitted band and for FRFs the model does not hold."""
+
 def mode_indicators(frfs: Union[Path, FrfDict], band: Tuple[float, float] | None = None) -> dict[str, npt.NDArray[np.float64]]:
     """CMIF and MMIF of the FRFs in the band: {'frequency_hz', 'cmif', 'mmif'}."""
 
