@@ -919,7 +919,17 @@ PYBIND11_MODULE(_ema, m) {
         } else if (!given.contains("poles") || !given.contains("frfs")) {
           throw py::value_error("synthesize: fit_result has no 'modal_model': fit with stabilisation=True");
         }
-        const nlohmann::json j = nlohmann::json::parse(py::module_::import("json").attr("dumps")(given).cast<std::string>());
+        nlohmann::json j;
+        try {
+          j = nlohmann::json::parse(py::module_::import("json").attr("dumps")(given).cast<std::string>());
+          // The layout `ema fit --json` writes: checked here, so a wrong dict is a ValueError naming it.
+          for (const auto& p : j.at("poles")) (void)p.at(1).get<double>();
+          for (const auto& frf : j.at("frfs"))
+            for (const char* key : {"response_node", "response_dir", "reference_node", "reference_dir", "residues"})
+              (void)frf.at(key);
+        } catch (const nlohmann::json::exception& e) {
+          throw py::value_error(std::string("synthesize: modal_model is not in `ema fit --json`'s layout: ") + e.what());
+        }
         const auto f = py::array_t<double, py::array::c_style | py::array::forcecast>(frequency_hz);
         if (f.ndim() != 1 || f.size() == 0) throw py::value_error("synthesize: frequency_hz must be a 1-D array of Hz");
         const Eigen::VectorXd hz = Eigen::Map<const Eigen::VectorXd>(f.data(), f.size());

@@ -202,6 +202,11 @@ def test_synthesize_gives_back_the_analytic_frfs():
     assert np.isnan(syn["h"][:, ~inside, :]).all()
     with pytest.raises(ValueError, match="stabilisation=True"):
         ema.synthesize(ema.fit(frfs, band=(10.0, 190.0)), f)
+    broken = dict(fit["modal_model"], frfs=[{"response_node": 1}])
+    with pytest.raises(ValueError, match="layout"):
+        ema.synthesize(broken, f)
+    with pytest.raises(TypeError):
+        ema.synthesize([1, 2], f)
 
 
 def test_fit_that_finds_nothing_raises_as_the_cli_exits():
