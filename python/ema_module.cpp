@@ -1140,6 +1140,13 @@ PYBIND11_MODULE(_ema, m) {
         opt.effect_prior_odds = effect_prior_odds;
         opt.model_error = !exact_form;
         if (std::string why; !opt.IsValid(&why)) throw ema::UsageError(why);
+        // Ctrl-C: at every progress step (each candidate screened or fitted) the diagnosis takes the
+        // GIL back for a moment and asks Python whether a signal is pending; KeyboardInterrupt
+        // unwinds the search (single-threaded) instead of waiting for the whole call.
+        opt.progress = [](double, std::string_view) {
+          py::gil_scoped_acquire acquire;
+          if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        };
         dg::Diagnosis d;
         {
           py::gil_scoped_release release;
