@@ -1087,8 +1087,13 @@ PYBIND11_MODULE(_ema, m) {
         py::dict d;
         d["pairs"] = pairs;
         d["mac"] = Mat(r.mac);
-        d["unpaired_test"] = r.pairing.unpaired_test;
-        d["unpaired_model"] = r.pairing.unpaired_model;
+        // Mode numbers are 1-based everywhere (as pairs[] and `ema correlate --json`): the array
+        // indices of the MAC matrix are those numbers minus one.
+        std::vector<int> unpaired_test, unpaired_model;
+        for (int i : r.pairing.unpaired_test) unpaired_test.push_back(i + 1);
+        for (int i : r.pairing.unpaired_model) unpaired_model.push_back(i + 1);
+        d["unpaired_test"] = unpaired_test;
+        d["unpaired_model"] = unpaired_model;
         d["mean_agreement_pct"] = r.mean_agreement_pct;
         d["min_agreement_pct"] = r.min_agreement_pct;
         d["mean_mac"] = r.mean_mac;
@@ -1099,7 +1104,8 @@ PYBIND11_MODULE(_ema, m) {
       py::arg("test"), py::arg("model"), py::arg("mac_min") = ema::correlation::CorrelationOptions{}.pairing.mac_min,
       "Test modes against model modes as `ema correlate` (paths, modes dicts or dicts in `ema fit --json`'s\n"
       "layout): MAC matrix on the shared DOFs, pairing, agreement % = 100 (1 - |f_model - f_test| / f_model);\n"
-      "unpaired modes are 0-based indices.");
+      "mode numbers (pairs[].test_mode, model_mode, unpaired_test, unpaired_model) are 1-based as in\n"
+      "`ema correlate --json`; the MAC matrix is indexed by those numbers minus one.");
 
   const ema::diagnose::DiagnoseOptions defaults;
   m.def(

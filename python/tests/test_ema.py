@@ -103,6 +103,19 @@ def test_correlate_matches_cli(beam_fit, tmp):
     # The MAC matrix holds the paired entries.
     for p in py["pairs"]:
         assert py["mac"][p["test_mode"] - 1, p["model_mode"] - 1] == p["mac"]
+    # One convention (issue 41): unpaired modes are mode numbers too, 1-based as the CLI's.
+    assert py["unpaired_test"] == [u["test_mode"] for u in cli["unpaired_test"]]
+    assert py["unpaired_model"] == [u["model_mode"] for u in cli.get("unpaired_model", [])]
+    numbers = sorted([p["model_mode"] for p in py["pairs"]] + py["unpaired_model"])
+    assert numbers == list(range(1, py["mac"].shape[1] + 1))
+    # The same modes against themselves without their second: test mode 2 is the unpaired one.
+    test = ema.read_modes(str(d / "modes.unv"))
+    n = len(test["frequency_hz"])
+    keep = [i for i in range(n) if i != 1]
+    model = {k: (v[..., keep] if isinstance(v, np.ndarray) and v.shape[-1] == n else v) for k, v in test.items()}
+    r = ema.correlate(test, model)
+    assert r["unpaired_test"] == [2] and r["unpaired_model"] == []
+    assert [(p["test_mode"], p["model_mode"]) for p in r["pairs"]] == [(1, 1), (3, 2)]
 
 
 def test_mac_of_mismatched_shapes_raises():
