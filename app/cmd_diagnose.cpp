@@ -246,8 +246,10 @@ nlohmann::json FindingsJson(const std::vector<EffectFinding>& findings) {
   return out;
 }
 
-std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& model) {
+std::string DiagnosisSummary(const diagnose::Diagnosis& d, const std::vector<EffectFinding>& findings) {
   const diagnose::Candidate& first = d.candidates.front();
+  // No reading makes the model adequate and its own error dominates the test's σ.
+  const bool inadequate_model = !first.noise_consistent && first.model_error.dominates;
   std::ostringstream out;
   auto adequacy = [&](const diagnose::Candidate& c) {
     const bool tiny = c.noise_consistent && c.reduced_chi2 < 0.01;  // well inside σ (the floor may dominate it)
@@ -259,9 +261,9 @@ std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& m
                                : " (1 would be noise alone): the model still misses something these data can see"
                                  + std::string(c.effects.empty() ? "" : "; rank 1 is not the whole answer") + ".\n");
   };
-  if (!first.noise_consistent && first.model_error.dominates) InadequateModelWords(d, &out);
+  if (inadequate_model) InadequateModelWords(d, &out);
   if (first.effects.empty()) {
-    if (!first.noise_consistent && first.model_error.dominates)
+    if (inadequate_model)
       // Not "nothing is missing": something is, but none of the vocabulary's effects explains it
       // beyond the model's own error.
       out << "Diagnosis: no effect the model can try explains the mismatch beyond the model's own error (the model "
@@ -276,7 +278,6 @@ std::string DiagnosisSummary(const diagnose::Diagnosis& d, const model::Model& m
   } else {
     out << "Diagnosis: the model misses " << first.effects.size() << " effect" << (first.effects.size() > 1 ? "s" : "")
         << " (rank 1, probability " << HonestPercent(first) << "):\n";
-    const std::vector<EffectFinding> findings = RankOneFindings(d, model);
     for (size_t i = 0; i < findings.size(); ++i) {
       const EffectFinding& f = findings[i];
       out << "  " << i + 1 << ". " << f.full << " — " << Percent(f.probability) << " over every candidate that holds it";
@@ -405,9 +406,10 @@ app::DiagnoseStageResult app::RunDiagnoseStage(const DiagnoseConfig& config, con
   json& json_out = stage.json;
   json_out = formats::DiagnosisJson(d, dopt);
   const diagnose::Candidate& first = d.candidates.front();
-  stage.summary = DiagnosisSummary(d, model);
+  const std::vector<EffectFinding> findings = RankOneFindings(d, model);
+  stage.summary = DiagnosisSummary(d, findings);
   json_out["summary"] = stage.summary;
-  json_out["findings"] = FindingsJson(RankOneFindings(d, model));
+  json_out["findings"] = FindingsJson(findings);
   out << stage.summary << "\n" << d.explanation
             << "\n\n| rank | candidate | parameters | probability | mean |Δf| [%] | mean MAC | score |\n"
             << "|---:|---|---|---:|---:|---:|---:|\n";

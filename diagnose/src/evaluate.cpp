@@ -74,18 +74,16 @@ Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, co
     : base_(base), setups_(std::move(setups)), options_(options), max_modes_(max_modes) {
   for (const auto& s : setups_) residual_count_ += 2 * static_cast<int>(s.test_hz.size());
   model_error_gain_.resize(residual_count_);
+  Eigen::VectorXd log_hz(residual_count_ / 2);
   int row = 0;
   for (const auto& s : setups_)
     for (Eigen::Index i = 0; i < s.test_hz.size(); ++i, row += 2) {
       model_error_gain_(row) = s.test_hz(i) / s.sigma_hz(i);
       model_error_gain_(row + 1) = 1.0 / s.sigma_shape(i);
+      log_hz(row / 2) = std::log(std::max(s.test_hz(i), 1e-300));
     }
   model_error_trend_ = Eigen::VectorXd::Zero(residual_count_);
-  if (residual_count_ > 0) {
-    Eigen::VectorXd log_hz(residual_count_ / 2);
-    row = 0;
-    for (const auto& s : setups_)
-      for (Eigen::Index i = 0; i < s.test_hz.size(); ++i) log_hz(row++) = std::log(std::max(s.test_hz(i), 1e-300));
+  if (log_hz.size() > 0) {
     const double mean = log_hz.mean();
     const double sd = std::sqrt((log_hz.array() - mean).square().mean());
     if (sd > 1e-9)
