@@ -15,6 +15,7 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <complex>
 #include <cstdlib>
 #include <filesystem>
@@ -938,8 +939,10 @@ PYBIND11_MODULE(_ema, m) {
         mm.frf_type = type == "receptance" ? ema::FrfType::kReceptance
                       : type == "mobility" ? ema::FrfType::kMobility
                                            : ema::FrfType::kAccelerance;
-        const auto band = j.value("band_hz", std::vector<double>{0.0, 0.0});
-        if (band.size() == 2) mm.band_lo_hz = band[0], mm.band_hi_hz = band[1];
+        // Without a band the model is evaluated at every line above 0 Hz.
+        const auto band = j.value("band_hz", std::vector<double>{});
+        mm.band_hi_hz = std::numeric_limits<double>::infinity();
+        if (band.size() == 2 && band[1] > band[0]) mm.band_lo_hz = band[0], mm.band_hi_hz = band[1];
         for (const auto& p : j.at("poles")) mm.poles_fitted.emplace_back(p.at(0).get<double>(), p.at(1).get<double>());
         auto dof = [](const nlohmann::json& e, const char* node, const char* dir) {
           const int d = ema::ParseDirection(e.at(dir).get<std::string>());
@@ -973,8 +976,9 @@ PYBIND11_MODULE(_ema, m) {
           mm.upper_residual(c) = e.frf->value("upper_residual", 0.0);
           held[static_cast<size_t>(c)] = true;
         }
-        // (references, lines, outputs) as every FRF dict; NaN for an FRF the model does not hold
-        // and outside the band it was fitted in (nothing is extrapolated).
+        // (references, lines, outputs) as every FRF dict, through the synthesis the report draws
+        // (SynthesiseMeasuredFrf: NaN outside the band it was fitted in, nothing extrapolated);
+        // NaN for an FRF the dict does not hold.
         py::array_t<std::complex<double>> h({static_cast<py::ssize_t>(m), static_cast<py::ssize_t>(hz.size()),
                                              static_cast<py::ssize_t>(l)});
         auto hr = h.mutable_unchecked<3>();
@@ -982,11 +986,9 @@ PYBIND11_MODULE(_ema, m) {
         for (int o = 0; o < l; ++o)
           for (int i = 0; i < m; ++i) {
             const bool have = held[static_cast<size_t>(o * m + i)];
-            const Eigen::VectorXcd v = have ? ema::curvefit::SynthesiseFrf(mm, o, i, hz) : Eigen::VectorXcd();
-            for (Eigen::Index k = 0; k < hz.size(); ++k) {
-              const bool inside = !(mm.band_hi_hz > mm.band_lo_hz) || (hz(k) >= mm.band_lo_hz && hz(k) <= mm.band_hi_hz);
-              hr(i, k, o) = have && inside ? v(k) : nan;
-            }
+            const Eigen::VectorXcd v =
+                have ? ema::curvefit::SynthesiseMeasuredFrf(mm, mm.outputs[o], mm.references[i], hz) : Eigen::VectorXcd();
+            for (Eigen::Index k = 0; k < hz.size(); ++k) hr(i, k, o) = have ? v(k) : nan;
           }
         py::dict d;
         d["frequency_hz"] = Vec(hz);
@@ -1052,14 +1054,8 @@ PYBIND11_MODULE(_ema, m) {
 
   m.def(
       "mac",
-      [](const Eigen::MatrixXcd& a, const Eigen::MatrixXcd& b) {
-        // Shapes of different lengths have no MAC: comparing them read past the shorter one.
-        if (a.rows() != b.rows())
-          throw py::value_error("mac: a and b must hold the same DOFs (rows): a is " + std::to_string(a.rows()) + "×" +
-                                std::to_string(a.cols()) + ", b is " + std::to_string(b.rows()) + "×" +
-                                std::to_string(b.cols()));
-        return Mat(ema::correlation::MacMatrix(a, b));
-      },
+      // Shapes of different lengths: MacMatrix's std::invalid_argument, a ValueError in Python.
+      [](const Eigen::MatrixXcd& a, const Eigen::MatrixXcd& b) { return Mat(ema::correlation::MacMatrix(a, b)); },
       py::arg("a"), py::arg("b"),
       "MAC between every column (mode shape) of a and every column of b (rows/DOFs aligned): |a^H b|^2 / (a^H a b^H b).");
 

@@ -16,8 +16,9 @@ double Mac(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
 
 Eigen::MatrixXd MacMatrix(const Eigen::MatrixXcd& a, const Eigen::MatrixXcd& b) {
   if (a.rows() != b.rows())
-    throw std::invalid_argument("MacMatrix: the shapes must have the same DOFs (rows), got " + std::to_string(a.rows()) +
-                                " and " + std::to_string(b.rows()));
+    throw std::invalid_argument("mac: a and b must hold the same DOFs (rows): a is " + std::to_string(a.rows()) + "×" +
+                                std::to_string(a.cols()) + ", b is " + std::to_string(b.rows()) + "×" +
+                                std::to_string(b.cols()));
   Eigen::MatrixXd mac(a.cols(), b.cols());
   for (Eigen::Index i = 0; i < a.cols(); ++i)
     for (Eigen::Index j = 0; j < b.cols(); ++j) mac(i, j) = Mac(a.col(i), b.col(j));
