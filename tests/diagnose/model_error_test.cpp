@@ -5,46 +5,20 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <complex>
-#include <filesystem>
-#include <random>
 
 #include "ema/diagnose/diagnose.hpp"
-#include "ema/formats/model_file.hpp"
 #include "ema/model/effects.hpp"
 #include "ema/model/solve.hpp"
+#include "stack_truths.hpp"
 
 namespace ema::diagnose {
 namespace model_error_test {
-namespace fs = std::filesystem;
 using model::Model;
 
-Model Stack() { return formats::ReadModelFile(fs::path(EMA_SOURCE_DIR) / "tests/diagnose/data/benchmark-stack2.toml"); }
-
-// The truth: each spring's stiffness times e^(scatter·N(0,1)), drawn with `seed`.
-Model Scattered(const Model& nominal, double scatter, unsigned seed) {
-  Model truth = nominal;
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g;
-  for (auto& s : truth.springs) s.stiffness_factor *= std::exp(scatter * g(rng));
-  return truth;
-}
-
-// The test: the truth's modes with 0.1 % frequency and 1 % shape noise (what the benchmark's
-// hammer tests give), fixed seed.
-ModeSet Measured(const Model& truth, unsigned seed) {
-  ModeSet modes = model::Solve(truth, {}).modes;
-  std::mt19937 rng(seed + 1000);
-  std::normal_distribution<double> g;
-  for (Mode& mode : modes.modes) {
-    mode.frequency_hz *= 1.0 + 1e-3 * g(rng);
-    const double rms = std::sqrt(mode.shape.squaredNorm() / mode.shape.size());
-    for (Eigen::Index i = 0; i < mode.shape.size(); ++i) mode.shape(i) += 1e-2 * rms * std::complex<double>(g(rng), g(rng));
-    mode.pole = FrequencyAndDampingToPole(mode.frequency_hz, mode.damping_ratio);
-  }
-  modes.source = "scattered stack";
-  return modes;
-}
+using test::Measured;
+using test::Scattered;
+using test::SpreadMass;
+using test::Stack;
 
 // The model error's known size: the rms relative frequency error of the nominal model against
 // the (noise-free) truth, mode by mode in frequency order.
@@ -117,11 +91,7 @@ TEST(ModelError, AMassSpreadOverTheBodiesIsTheModelsErrorNotAnAddedMass) {
   for (unsigned seed = 11; seed <= 16; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     Model truth = Scattered(nominal, 0.01, seed);
-    for (auto& b : truth.bodies) {
-      b.mass *= 1.012;
-      b.inertia *= 1.012;
-      b.products *= 1.012;
-    }
+    SpreadMass(&truth, 1.012);
     const Diagnosis d = Diagnose(nominal, {{"", Measured(truth, seed)}}, options);
     ASSERT_FALSE(d.candidates.empty());
     const Candidate& first = d.candidates.front();
