@@ -68,11 +68,7 @@ sanitize() {
   if [[ "${scope}" == "input" ]]; then
     local modules=(core acquisition frf model formats) targets=(ema test_app)
     for m in "${modules[@]}"; do targets+=("test_${m}"); done
-    if ((${#compiler[@]})); then
-      for t in uff_reader csv matrix_market model_file project_file plan_file json_results json_modes_roundtrip; do
-        targets+=("fuzz_${t}")
-      done
-    fi
+    if ((${#compiler[@]})); then targets+=(fuzz_targets); fi  # fuzz/CMakeLists.txt's list
     step "sanitizer build (input modules)" cmake --build build-asan -j"${jobs}" --target "${targets[@]}"
     step "sanitizer suite (input modules)" ctest --test-dir build-asan --output-on-failure -j"${jobs}" --timeout 1800 \
          -R "^($(IFS='|'; echo "${modules[*]}")|fuzz|app/(Corpus|BadInputTable|OutputsSpareInputs|Resources|ConvergenceExit))[/.]" \
