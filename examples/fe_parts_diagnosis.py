@@ -22,11 +22,16 @@ layout — what another lab would hand over. ema.diagnose then ranks what the no
 Run: v/bin/python examples/fe_parts_diagnosis.py [--factor 0.3] [--joint J2]
 """
 import argparse
+from typing import Any, Dict, List, Sequence, Tuple
 
 import numpy as np
+import numpy.typing as npt
 import scipy.sparse as sp
 
 import ema
+from ema.types import ModelDict, ModesDict, ModesJson, PartDict
+
+Matrix = npt.NDArray[np.float64]
 
 E, RHO = 210e9, 7850.0  # steel, Pa and kg/m^3
 COLUMN = (0.04 * 0.04, 0.04 * 0.04**3 / 12)  # area m^2, second moment about y m^4
@@ -35,10 +40,10 @@ JOINT_TRANSLATION, JOINT_ROTATION = 1e10, 2e5  # N/m, N m/rad
 DOF_NAMES = ("ux", "uz", "ry")
 
 
-def frame_element(xa, xb, area, inertia):
+def frame_element(xa: Matrix, xb: Matrix, area: float, inertia: float) -> Tuple[Matrix, float]:
     """6 x 6 stiffness of a 2D Euler-Bernoulli beam element in the x-z plane, global (ux, uz, ry) per end."""
     d = np.subtract(xb, xa)
-    length = np.hypot(*d)
+    length = float(np.hypot(*d))
     c, s = d / length
     ea, ei = E * area / length, E * inertia
     k1, k2, k3, k4 = 12 * ei / length**3, 6 * ei / length**2, 4 * ei / length, 2 * ei / length
@@ -54,9 +59,9 @@ def frame_element(xa, xb, area, inertia):
     return t.T @ k @ t, length
 
 
-def build_frame():
+def build_frame() -> ModelDict:
     """Nodes, DOF map, lumped mass and the parts' stiffness matrices (scipy.sparse, full storage)."""
-    nodes = {}
+    nodes: Dict[int, Tuple[float, float, float]] = {}
     for i in range(1, 7):  # columns: 6 elements each over 0.8 m; the base nodes 100, 200 are clamped
         nodes[100 + i] = (0.0, 0.0, 0.8 * i / 6)
         nodes[200 + i] = (1.0, 0.0, 0.8 * i / 6)
@@ -69,15 +74,19 @@ def build_frame():
     dofs = [(node, d) for node in nodes_free for d in DOF_NAMES]
     mass = np.zeros(n)
 
-    def assemble(elements, section):
-        rows, cols, vals = [], [], []
+    def assemble(elements: Sequence[Tuple[int, int]], section: Tuple[float, float]) -> Any:
+        rows: List[int] = []
+        cols: List[int] = []
+        vals: List[float] = []
         for a, b in elements:
             k, length = frame_element(np.take(nodes[a], (0, 2)), np.take(nodes[b], (0, 2)), *section)
             ids = [index.get((node, d), -1) for node in (a, b) for d in DOF_NAMES]  # -1: clamped
             for p, ip in enumerate(ids):
                 for q, iq in enumerate(ids):
                     if ip >= 0 and iq >= 0:
-                        rows.append(ip), cols.append(iq), vals.append(k[p, q])
+                        rows.append(ip)
+                        cols.append(iq)
+                        vals.append(k[p, q])
             m_half = RHO * section[0] * length / 2  # lumped: translations only, rotations massless
             for node in (a, b):
                 for d in ("ux", "uz"):
@@ -85,9 +94,11 @@ def build_frame():
                         mass[index[node, d]] += m_half
         return sp.csc_matrix((vals, (rows, cols)), shape=(n, n))
 
-    def joint(a, b):
+    def joint(a: int, b: int) -> Any:
         """Two coincident nodes tied: stiff in ux and uz, semi-rigid in ry (a bolted joint)."""
-        rows, cols, vals = [], [], []
+        rows: List[int] = []
+        cols: List[int] = []
+        vals: List[float] = []
         for d, k in (("ux", JOINT_TRANSLATION), ("uz", JOINT_TRANSLATION), ("ry", JOINT_ROTATION)):
             i, j = index[a, d], index[b, d]
             rows += [i, j, i, j]
@@ -98,7 +109,7 @@ def build_frame():
     column_a = [(100 + i, 101 + i) for i in range(6)]
     column_b = [(200 + i, 201 + i) for i in range(6)]
     beam = [(301 + i, 302 + i) for i in range(13)]
-    parts = [
+    parts: List[PartDict] = [
         {"name": "A", "group": "columns", "stiffness": assemble(column_a, COLUMN), "uncertainty": 0.1},
         {"name": "B", "group": "columns", "stiffness": assemble(column_b, COLUMN), "uncertainty": 0.1},
         {"name": "beam", "stiffness": assemble(beam, BEAM), "uncertainty": 0.1},
@@ -116,11 +127,11 @@ def build_frame():
     }
 
 
-def measured(modes, sigma=0.001, seed=1):
+def measured(modes: ModesDict, sigma: float = 0.001, seed: int = 1) -> ModesJson:
     """A mode set in `ema fit --json`'s layout: +X and +Z at the sensors, frequencies with a 1σ noise."""
     rng = np.random.default_rng(seed)
     keep = [r for r, (_, direction) in enumerate(modes["dofs"]) if direction in ("+X", "+Z")]
-    out = []
+    out: List[Any] = []
     for i, f in enumerate(modes["frequency_hz"]):
         f_measured = f * (1 + sigma * rng.standard_normal())
         shape = [{"node": modes["dofs"][r][0], "dir": modes["dofs"][r][1], "value": modes["shapes"][r, i].real}
@@ -130,7 +141,7 @@ def measured(modes, sigma=0.001, seed=1):
     return {"modes": out}
 
 
-def main():
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--joint", default="J2", choices=["J1", "J2"], help="the joint loosened in the truth")
     parser.add_argument("--factor", type=float, default=0.3, help="its stiffness factor in the truth")
@@ -151,7 +162,9 @@ def main():
 
     diagnosis = ema.diagnose(nominal, {"": test})
     best = diagnosis["candidates"][0]
-    print(f"rank 1: {best['description']} (probability {100 * best['probability']:.0f} %)")
+    probability = best["probability"]  # None when the diagnosis could not weigh it (the JSON's null)
+    share = f"{100 * probability:.0f} %" if probability is not None else "unknown"
+    print(f"rank 1: {best['description']} (probability {share})")
     for key, value in best["parameters"].items():
         print(f"  {key} = {value:.3g} ± {best['uncertainty'][key]:.2g}")
     print(f"  mean frequency error {diagnosis['baseline']['mean_abs_frequency_error_pct']:.2f} % -> "

@@ -9,14 +9,16 @@ Run: v/bin/python examples/guideway_story.py [SAMPLE_DIR]   (default: samples/gu
 import argparse
 import pathlib
 import sys
+from typing import Dict
 
 import ema
+from ema.types import FitDict
 
 SETUPS = ["stud-5um", "stud-9um"]  # the two stud settings of the test (model.toml's [[setup]]s)
 BAND = (100.0, 450.0)  # Hz
 
 
-def main():
+def main() -> int:
     default = pathlib.Path(__file__).resolve().parents[1] / "samples" / "guideway"
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("sample", nargs="?", type=pathlib.Path, default=default,
@@ -26,7 +28,7 @@ def main():
     if not model.exists():
         sys.exit(f"guideway_story.py: {model} not found; give the samples/guideway folder of the ema repository")
 
-    tests = {}
+    tests: Dict[str, FitDict] = {}
     for setup in SETUPS:
         frfs = ema.estimate_frfs([str(args.sample / "data" / f"{setup}.unv")])  # hammer time data -> H1 FRFs
         quality = ema.quality(frfs, band=BAND)
@@ -41,7 +43,9 @@ def main():
     # sensor_mass lets the diagnosis model them instead of taking them for a missing mass.
     diagnosis = ema.diagnose(model, tests, sensor_mass=0.0112)
     best = diagnosis["candidates"][0]
-    print(f"rank 1 ({100 * best['probability']:.0f} %): {best['description']}")
+    probability = best["probability"]  # None when the diagnosis could not weigh it (the JSON's null)
+    share = f"{100 * probability:.0f} %" if probability is not None else "probability unknown"
+    print(f"rank 1 ({share}): {best['description']}")
     print(f"  mean frequency error {diagnosis['baseline']['mean_abs_frequency_error_pct']:.2f} % -> "
           f"{best['mean_abs_frequency_error_pct']:.2f} %, mean MAC {diagnosis['baseline']['mean_mac']:.3f} -> "
           f"{best['mean_mac']:.3f}")

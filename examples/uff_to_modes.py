@@ -12,15 +12,17 @@ import argparse
 import json
 import pathlib
 import sys
+from typing import List, Optional, Tuple
 
 import numpy as np
 
 import ema
+from ema.types import ModeJson, ModesDict, ModesJson
 
 
-def modes_json(modes):
+def modes_json(modes: ModesDict) -> ModesJson:
     """A modes dict (ema.fit's) in `ema fit --json`'s layout: what other tools and ema diagnose read."""
-    out = []
+    out: List[ModeJson] = []
     for i, f in enumerate(modes["frequency_hz"]):
         sigma = modes["frequency_std_hz"][i]
         out.append({
@@ -33,7 +35,7 @@ def modes_json(modes):
     return {"modes": out}
 
 
-def main():
+def main() -> int:
     default = pathlib.Path(__file__).resolve().parents[1] / "samples" / "uff" / "dataset58_FRF.unv"
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("frfs", nargs="?", type=pathlib.Path, default=default, help="UFF 58 FRF file (or FRF table)")
@@ -49,13 +51,13 @@ def main():
     print(f"{args.frfs.name}: {len(frfs['outputs'])} responses x {len(frfs['references'])} references, "
           f"{len(f)} lines {f[0]:g}..{f[-1]:g} Hz, {frfs['quantity']}; "
           f"responses {frfs['outputs']}, references {frfs['references']}")
-    band = tuple(args.band) if args.band else None
+    band: Optional[Tuple[float, float]] = (args.band[0], args.band[1]) if args.band else None
     print(f"data quality: {ema.quality(frfs, band=band)['verdict']}")
 
     cmif = ema.mode_indicators(frfs, band=band)
     first = cmif["cmif"][:, 0]
     peaks = [i for i in range(1, len(first) - 1) if first[i] > first[i - 1] and first[i] >= first[i + 1]]
-    strongest = sorted(sorted(peaks, key=lambda i: -first[i])[:5])
+    strongest = sorted(sorted(peaks, key=lambda i: -float(first[i]))[:5])
     print("CMIF peaks (the strongest five):", ", ".join(f"{cmif['frequency_hz'][i]:.1f} Hz" for i in strongest))
 
     modes = ema.fit(frfs, band=band, order_max=args.order_max)

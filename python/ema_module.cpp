@@ -862,7 +862,8 @@ PYBIND11_MODULE(_ema, m) {
         // Each warning through Python's warnings (filterable, and an error under -W error); the
         // list stays in the result for scripts that read it.
         for (const std::string& w : fit.warnings)
-          if (PyErr_WarnEx(PyExc_RuntimeWarning, ("ema.fit: " + w).c_str(), 1) != 0) throw py::error_already_set();
+          // Stack level 2: the line that called the Python wrapper ema.fit, not the wrapper.
+          if (PyErr_WarnEx(PyExc_RuntimeWarning, ("ema.fit: " + w).c_str(), 2) != 0) throw py::error_already_set();
         py::dict d = ModesDict(fit.modes);
         d["synthesis_error"] = fit.synthesis_error;
         d["reciprocity_transposed"] = fit.transposed;
@@ -912,11 +913,14 @@ PYBIND11_MODULE(_ema, m) {
         // 'modal_model' alone): poles as the FRFs carry them, residues and residual terms per
         // measured FRF (`ema fit --json`'s modal_model).
         if (!IsMapping(fit_result)) throw py::type_error("synthesize: fit_result must be what ema.fit(..., stabilisation=True) returns");
-        py::dict given = py::reinterpret_borrow<py::dict>(fit_result);
+        // A copy as a real dict: any Mapping is accepted (a MappingProxyType borrowed as a dict
+        // crashed the interpreter in PyDict_Contains).
+        py::dict given = py::dict(fit_result);
         if (given.contains("modal_model")) {
           if (given["modal_model"].is_none())
             throw py::value_error("synthesize: this fit has no modal model (the peak method, or no mode)");
-          given = py::reinterpret_borrow<py::dict>(given["modal_model"]);
+          if (!IsMapping(given["modal_model"])) throw py::type_error("synthesize: fit_result['modal_model'] must be a dict");
+          given = py::dict(given["modal_model"]);
         } else if (!given.contains("poles") || !given.contains("frfs")) {
           throw py::value_error("synthesize: fit_result has no 'modal_model': fit with stabilisation=True");
         }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages ema needs, only when one is missing. Usage: scripts/install-deps.sh [--test]
-# --test adds what the test suite needs beyond the build (headless Chromium for the report check).
+# --test adds what the test suite needs beyond the build (headless Chromium for the report check; the
+# Python package's plots, tables and type check).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libfftw3-dev libceres-dev
           libboost-program-options-dev libgtest-dev libgmock-dev libtomlplusplus-dev
@@ -10,7 +11,8 @@ packages=(build-essential cmake pkg-config libeigen3-dev libfftw3-dev libceres-d
           libcpp-httplib-dev  # cpp-httplib: the local server of ema pick (docs/pick.md)
           calculix-ccx)  # CalculiX: the FE code of the bolted-frame sample (samples/bolted-frame)
 if [[ "${1:-}" == "--test" ]]; then
-  packages+=(chromium clang python3-pytest)
+  packages+=(chromium clang python3-pytest
+             python3-matplotlib python3-pandas mypy)  # ema.plot_*, ema.to_dataframe, mypy on examples/ (docs/python.md)
 fi
 missing=()
 for p in "${packages[@]}"; do

@@ -3,11 +3,12 @@ where it is installed and its functions."""
 import argparse
 import os
 import sys
+from typing import Optional, Sequence
 
 import ema
 
 
-def main(argv=None):
+def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m ema",
         description="The ema Python package: experimental modal analysis on numpy arrays. "

@@ -1,11 +1,13 @@
 """The package as `pip install .` installs it, and the examples/ run on it. Run by ctest
 python/venv-install (venv_install.py) inside a fresh virtualenv, with EMA_TEST_INSTALLED=1; skipped
 on the build tree (python/pytest)."""
+import json
 import os
 import pathlib
 import re
 import subprocess
 import sys
+import warnings
 
 import pytest
 
@@ -24,12 +26,16 @@ def run_example(name, *args, cwd):
     return result.stdout
 
 
+def refuse_non_json_constant(token):
+    raise AssertionError(f"{token} is not JSON (NaN must be written as null)")
+
+
 def test_the_package_is_the_installed_one():
     package = pathlib.Path(ema.__file__).parent
     assert sys.prefix != sys.base_prefix, "not in a virtualenv"
     assert package.is_relative_to(sys.prefix), package
     assert ema._ema.__file__.startswith(str(package))
-    for name in ["__init__.py", "__main__.py", "_ema.pyi", "py.typed"]:
+    for name in ["__init__.py", "__main__.py", "_ema.pyi", "py.typed", "plot.py", "results.py", "types.py"]:
         assert (package / name).exists(), name
 
 
@@ -58,3 +64,21 @@ def test_example_fe_parts_diagnosis(tmp):
     assert "member 'J2' of group 'joints'" in rank1, out
     factor = float(re.search(r"factor = ([0-9.]+)", out).group(1))
     assert abs(factor - 0.3) < 0.02, out
+
+
+def test_example_plot_fit(tmp):
+    # The measured beam (samples/meas-point, 30..300 Hz, orders up to 40): its three modes printed,
+    # the three plots saved as PNG, the fit as strict JSON with the modes' frequencies.
+    out = run_example("plot_fit.py", "-o", tmp / "plots", cwd=tmp)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # the beam's negative modal mass, in 'warnings'
+        fit = ema.fit(str(SOURCE / "samples" / "meas-point"), band=(30.0, 300.0), order_max=40)
+    assert f"{len(fit['frequency_hz'])} modes (synthesis error {fit['synthesis_error']:.3g})" in out, out
+    for f in fit["frequency_hz"]:
+        assert f"{f:.4g}" in out, out
+    for name in ["stabilisation.png", "frf.png", "mac.png"]:
+        assert (tmp / "plots" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+        assert f"wrote {tmp / 'plots' / name}" in out
+    written = json.loads((tmp / "plots" / "fit.json").read_text(), parse_constant=refuse_non_json_constant)
+    assert written["frequency_hz"] == fit["frequency_hz"].tolist()
+    assert len(written["stabilisation"]["orders"]) == 40
