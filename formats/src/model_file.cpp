@@ -17,6 +17,7 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/matrix_market.hpp"
 #include "ema/formats/toml_fields.hpp"
+#include "effect_toml.hpp"
 #include "text_lines.hpp"
 #include "ema/formats/uff.hpp"
 #include "ema/model/air_film.hpp"
@@ -48,6 +49,8 @@ void ForEachCsvRow(std::istream& in, const fs::path& file,
 class Reader : public TomlFields {
  public:
   explicit Reader(const fs::path& path) : TomlFields(path.string()), path_(path), dir_(path.parent_path()) {}
+  /// For TOML text that is not a file: `origin` names it in messages, `dir` resolves relative paths.
+  Reader(const std::string& origin, const fs::path& dir) : TomlFields(origin), dir_(dir) {}
 
   int Line(const toml::node& n) const { return static_cast<int>(n.source().begin.line); }
 
@@ -572,18 +575,35 @@ class Reader : public TomlFields {
         for (const auto& [k, v] : Table(*o, "operating")) s.operating[std::string(k.str())] = Number(v, std::string(k.str()));
       m.setups.push_back(s);
     });
-    each("effect", [&](const toml::table& t) {
-      CheckKeys(t, {"kind", "target", "law", "factor", "value", "mass", "k"}, "[[effect]]");
-      model::Effect e;
-      e.line = Line(t);
-      e.kind = String(Require(t, "kind", "[[effect]]"), "kind");
-      e.target = String(Require(t, "target", "[[effect]]"), "target");
-      for (const char* key : {"factor", "value", "mass", "k"})
-        if (auto v = OptNumber(t, key)) e.parameters[key] = *v;
-      if (const toml::node* l = t.get("law")) e.law = ParseLaw(*l, "effect " + e.kind);
-      m.effects.push_back(std::move(e));
-    });
+    each("effect", [&](const toml::table& t) { m.effects.push_back(ReadEffect(t)); });
     return m;
+  }
+
+  /// One [[effect]] table: kind, target, the parameters factor/value/mass/k and the law.
+  model::Effect ReadEffect(const toml::table& t) const {
+    CheckKeys(t, {"kind", "target", "law", "factor", "value", "mass", "k"}, "[[effect]]");
+    model::Effect e;
+    e.line = Line(t);
+    e.kind = String(Require(t, "kind", "[[effect]]"), "kind");
+    e.target = String(Require(t, "target", "[[effect]]"), "target");
+    for (const char* key : {"factor", "value", "mass", "k"})
+      if (auto v = OptNumber(t, key)) e.parameters[key] = *v;
+    if (const toml::node* l = t.get("law")) e.law = ParseLaw(*l, "effect " + e.kind);
+    return e;
+  }
+
+  /// The one [[effect]] block of `text` (effect_toml.hpp).
+  model::Effect ReadEffectText(const std::string& text) const {
+    toml::table root;
+    try {
+      root = toml::parse(text, file_);
+    } catch (const toml::parse_error& e) {
+      throw InputError(file_ + ":" + std::to_string(e.source().begin.line), std::string(e.description()));
+    }
+    CheckKeys(root, {"effect"}, "the effect text");
+    const toml::array* a = root["effect"].as_array();
+    if (!a || a->size() != 1) throw InputError(file_, "expected exactly one [[effect]] block");
+    return ReadEffect(Table((*a)[0], "effect"));
   }
 
  private:
@@ -606,6 +626,10 @@ std::string Array(const std::vector<double>& v) {
 }
 
 }  // namespace
+
+model::Effect ParseEffectToml(const std::string& text, const std::string& origin, const std::filesystem::path& base_dir) {
+  return Reader(origin, base_dir).ReadEffectText(text);
+}
 
 model::Model ReadModelFile(const std::filesystem::path& path) {
   std::error_code ec;

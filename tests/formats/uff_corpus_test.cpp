@@ -21,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path Data(const std::string& rel) { return fs::path(EMA_REAL_DATA_DIR) / "uff" / rel; }
+fs::path CorpusData(const std::string& rel) { return fs::path(EMA_REAL_DATA_DIR) / "uff" / rel; }
 fs::path Tmp(const std::string& name) {
   fs::create_directories(EMA_TEST_TMP_DIR);
   return fs::path(EMA_TEST_TMP_DIR) / name;
@@ -146,7 +146,7 @@ TEST(UffCorpus, CorpusListIsComplete) {
   // A new file in the shared corpus must be added to the table above.
   int files = 0;
   for (const auto& dir : {"pyuff", "ufffiles-jl"})
-    for (const auto& e : fs::directory_iterator(Data(dir))) {
+    for (const auto& e : fs::directory_iterator(CorpusData(dir))) {
       ++files;
       const std::string rel = std::string(dir) + "/" + e.path().filename().string();
       EXPECT_TRUE(kCorpus.count(rel)) << rel;
@@ -161,13 +161,13 @@ TEST(UffCorpus, EveryFileReadsWithTheExpectedDatasets) {
     ReadOptions headers;
     headers.headers_only = true;
     std::vector<Dataset> scan;
-    ASSERT_NO_THROW(scan = ReadFile(Data(rel), headers));
+    ASSERT_NO_THROW(scan = ReadFile(CorpusData(rel), headers));
     EXPECT_EQ(Counts(scan), expected);
-    ASSERT_NO_THROW(SummarizeFile(Data(rel)));
+    ASSERT_NO_THROW(SummarizeFile(CorpusData(rel)));
     // Full read; the one deliberately truncated sample is covered in its own test.
     if (rel == "pyuff/dataset_milestone_in_header.uff") continue;
     std::vector<Dataset> full;
-    ASSERT_NO_THROW(full = ReadFile(Data(rel)));
+    ASSERT_NO_THROW(full = ReadFile(CorpusData(rel)));
     EXPECT_EQ(Counts(full), expected);
     const auto it = k58.find(rel);
     if (it != k58.end()) {
@@ -184,7 +184,7 @@ TEST(UffCorpus, EveryFileReadsWithTheExpectedDatasets) {
 
 TEST(UffCorpus, TruncatedSampleIsReportedWithCounts) {
   // The file declares N = 2508876 (record 7) but holds 7 lines of 6 values = 42 (sed -n 14,20p).
-  const fs::path p = Data("pyuff/dataset_milestone_in_header.uff");
+  const fs::path p = CorpusData("pyuff/dataset_milestone_in_header.uff");
   try {
     ReadFile(p);
     FAIL() << "expected InputError";
@@ -207,8 +207,8 @@ TEST(UffCorpus, TruncatedSampleIsReportedWithCounts) {
 }
 
 TEST(UffCorpus, SampleUff58AsciiAndBinaryAgree) {
-  const auto a = std::get<Function58>(ReadFile(Data("pyuff/Sample_UFF58_ascii.uff")).at(0).body);
-  const auto b = std::get<Function58>(ReadFile(Data("pyuff/Sample_UFF58b_bin.uff")).at(0).body);
+  const auto a = std::get<Function58>(ReadFile(CorpusData("pyuff/Sample_UFF58_ascii.uff")).at(0).body);
+  const auto b = std::get<Function58>(ReadFile(CorpusData("pyuff/Sample_UFF58b_bin.uff")).at(0).body);
   ASSERT_EQ(a.count, 79292);
   ASSERT_EQ(b.count, 79292);
   EXPECT_TRUE(b.binary);
@@ -227,8 +227,8 @@ TEST(UffCorpus, Dataset58CasesAsciiAndBinaryAgree) {
   for (int c = 1; c <= 8; ++c) {
     SCOPED_TRACE(c);
     const std::string stem = "ufffiles-jl/dataset58_case" + std::to_string(c);
-    const auto a = std::get<Function58>(ReadFile(Data(stem + "_ascii.unv")).at(0).body);
-    const auto b = std::get<Function58>(ReadFile(Data(stem + "_binary.unv")).at(0).body);
+    const auto a = std::get<Function58>(ReadFile(CorpusData(stem + "_ascii.unv")).at(0).body);
+    const auto b = std::get<Function58>(ReadFile(CorpusData(stem + "_binary.unv")).at(0).body);
     // Record 7 field 1 per case (spec §12.8): 2, 2, 5, 5, 4, 4, 6, 6; even for odd cases.
     const int type[] = {2, 2, 5, 5, 4, 4, 6, 6};
     EXPECT_EQ(a.ordinate_type, type[c - 1]);
@@ -248,8 +248,8 @@ TEST(UffCorpus, Dataset58CasesAsciiAndBinaryAgree) {
 
 TEST(UffCorpus, BinaryQuirks) {
   // CR LF between payload and "-1" (Test.Lab 2021) vs the repaired file: same numbers, one note each.
-  const auto raw = ReadFile(Data("pyuff/MPSTD#Set001_2024_10_08_10_27_07.uff"));
-  const auto fixed = ReadFile(Data("pyuff/MPSTD#Set001_2024_10_08_10_27_07_fixed_test.uff"));
+  const auto raw = ReadFile(CorpusData("pyuff/MPSTD#Set001_2024_10_08_10_27_07.uff"));
+  const auto fixed = ReadFile(CorpusData("pyuff/MPSTD#Set001_2024_10_08_10_27_07_fixed_test.uff"));
   ASSERT_EQ(raw.size(), 4u);
   for (size_t k = 0; k < 4; ++k) {
     EXPECT_EQ(std::get<Function58>(raw[k].body).y, std::get<Function58>(fixed[k].body).y);
@@ -257,17 +257,17 @@ TEST(UffCorpus, BinaryQuirks) {
     EXPECT_TRUE(fixed[k].notes.empty());
   }
   // binary8byte.uff: 58b double precision with CRLF headers, N = 250.
-  const auto b8 = std::get<Function58>(ReadFile(Data("pyuff/binary8byte.uff")).at(0).body);
+  const auto b8 = std::get<Function58>(ReadFile(CorpusData("pyuff/binary8byte.uff")).at(0).body);
   EXPECT_EQ(b8.ordinate_type, 4);
   EXPECT_EQ(b8.y.size(), 250u);
   // dataset58_ufb.ufb: identifier line without fields 7-10, two datasets.
-  EXPECT_EQ(ReadFile(Data("ufffiles-jl/dataset58_ufb.ufb")).size(), 2u);
+  EXPECT_EQ(ReadFile(CorpusData("ufffiles-jl/dataset58_ufb.ufb")).size(), 2u);
 }
 
 TEST(UffCorpus, TextQuirks) {
   // Run-together fields and fixed notation (sed -n 14p dataset58_nospacing.uff):
   // "-3.09944E-004-2.74181E-004  -0.00115633-6.31809E-004..."
-  const auto ns = std::get<Function58>(ReadFile(Data("ufffiles-jl/dataset58_nospacing.uff")).at(0).body);
+  const auto ns = std::get<Function58>(ReadFile(CorpusData("ufffiles-jl/dataset58_nospacing.uff")).at(0).body);
   ASSERT_EQ(ns.y.size(), 66u);
   EXPECT_DOUBLE_EQ(ns.y[0], -3.09944E-004);
   EXPECT_DOUBLE_EQ(ns.y[1], -2.74181E-004);
@@ -275,20 +275,20 @@ TEST(UffCorpus, TextQuirks) {
   EXPECT_DOUBLE_EQ(ns.dx, 4.99942E-004);
   EXPECT_EQ(ns.axes[0].units, "(Sec)");
   // Partial last line, 3-digit exponents, UTF-8 "m/s²" in a label (catman).
-  const auto th = std::get<Function58>(ReadFile(Data("pyuff/time-history-not-all-columns-filled.uff")).at(0).body);
+  const auto th = std::get<Function58>(ReadFile(CorpusData("pyuff/time-history-not-all-columns-filled.uff")).at(0).body);
   ASSERT_EQ(th.y.size(), 13u);
   EXPECT_DOUBLE_EQ(th.y[12], -5.84096E+00);
   EXPECT_EQ(th.axes[1].units, "m/s\xC2\xB2");
   EXPECT_DOUBLE_EQ(th.dx, 5.0E-005);
   // Zero padding after N (4 extra zeros in dataset58_FRF.unv, 2 in _coh and _time).
-  const auto frf = ReadFile(Data("ufffiles-jl/dataset58_FRF.unv"));
+  const auto frf = ReadFile(CorpusData("ufffiles-jl/dataset58_FRF.unv"));
   EXPECT_EQ(frf[0].notes, std::vector<std::string>{"58: 4 zero padding values after N ignored"});
   EXPECT_EQ(std::get<Function58>(frf[0].body).response_entity, ".1.Z-");
   // UTF-8 labels read the same numbers as the ASCII twin.
-  const auto utf = ReadFile(Data("ufffiles-jl/dataset58_FRF_UTF.unv"));
+  const auto utf = ReadFile(CorpusData("ufffiles-jl/dataset58_FRF_UTF.unv"));
   EXPECT_EQ(std::get<Function58>(utf[0].body).y, std::get<Function58>(frf[0].body).y);
   // Latin-1 byte in a label.
-  EXPECT_NO_THROW(ReadFile(Data("pyuff/non_ascii_header.uff")));
+  EXPECT_NO_THROW(ReadFile(CorpusData("pyuff/non_ascii_header.uff")));
 }
 
 // The reader's fixed-position fast paths (E13.5 and E20.12, the canonical single and double forms
@@ -347,7 +347,7 @@ TEST(UffValues, CanonicalFieldsReadExactlyAsStrtod) {
 }
 
 TEST(UffCorpus, GeometryDatasets) {
-  const auto tl = ReadFile(Data("pyuff/TestLab 161 164 18 15 82.uff"));
+  const auto tl = ReadFile(CorpusData("pyuff/TestLab 161 164 18 15 82.uff"));
   // awk between "    15" and "-1": 36 node lines; first "1 0 1 8 -2.40000e+00 -9.50000e-01 0.00000e+00".
   const Nodes15* n15 = nullptr;
   const CoordinateSystems18* cs = nullptr;
@@ -377,14 +377,14 @@ TEST(UffCorpus, GeometryDatasets) {
   EXPECT_EQ(traces[0]->id, "Massif");
   EXPECT_EQ(traces[1]->nodes.size(), 32u);
   // dataset82.unv: 75 entries over 10 lines, the last "0 139 140".
-  const auto t82 = std::get<TraceLine82>(ReadFile(Data("ufffiles-jl/dataset82.unv")).at(0).body);
+  const auto t82 = std::get<TraceLine82>(ReadFile(CorpusData("ufffiles-jl/dataset82.unv")).at(0).body);
   ASSERT_EQ(t82.nodes.size(), 75u);
   EXPECT_EQ(t82.nodes[74], 140);
   EXPECT_EQ(t82.nodes[1], 131);
   // dataset2411.unv: 581 lines = 2 delimiters + number line + 289 x 2 records.
-  EXPECT_EQ(std::get<Nodes2411>(ReadFile(Data("ufffiles-jl/dataset2411.unv")).at(0).body).nodes.size(), 289u);
+  EXPECT_EQ(std::get<Nodes2411>(ReadFile(CorpusData("ufffiles-jl/dataset2411.unv")).at(0).body).nodes.size(), 289u);
   // Unit2.unv: foot / pound-force factors, D exponents.
-  const auto u2 = std::get<Units164>(ReadFile(Data("ufffiles-jl/Unit2.unv")).at(0).body);
+  const auto u2 = std::get<Units164>(ReadFile(CorpusData("ufffiles-jl/Unit2.unv")).at(0).body);
   EXPECT_EQ(u2.code, 2);
   EXPECT_EQ(u2.temperature_mode, 2);
   EXPECT_DOUBLE_EQ(u2.length, 3.28083989501312345);
@@ -394,7 +394,7 @@ TEST(UffCorpus, GeometryDatasets) {
 
 TEST(UffCorpus, ModeShapes) {
   // dataset55.unv: analysis 3, lambda = -9.0604E-01 + j 2.5080E+01 (sed -n 9p).
-  const ModeSet m = ReadModeSet(Data("ufffiles-jl/dataset55.unv"));
+  const ModeSet m = ReadModeSet(CorpusData("ufffiles-jl/dataset55.unv"));
   ASSERT_EQ(m.modes.size(), 1u);
   const double w = std::hypot(-9.0604E-01, 2.5080E+01);
   EXPECT_NEAR(m.modes[0].frequency_hz, w / kTwoPi, 1e-12);
@@ -405,13 +405,13 @@ TEST(UffCorpus, ModeShapes) {
   EXPECT_DOUBLE_EQ(m.modes[0].shape[0].real(), 2.2180E-07);
   EXPECT_DOUBLE_EQ(m.modes[0].shape[0].imag(), 1.7824E-06);
   // Real normal modes (analysis 2): uff55_translation.uff, 3 modes at 4 nodes, f1 = 10 Hz.
-  const ModeSet r = ReadModeSet(Data("pyuff/uff55_translation.uff"));
+  const ModeSet r = ReadModeSet(CorpusData("pyuff/uff55_translation.uff"));
   ASSERT_EQ(r.modes.size(), 3u);
   EXPECT_DOUBLE_EQ(r.modes[0].frequency_hz, 10.0);
   EXPECT_DOUBLE_EQ(r.modes[0].shape[0].real(), -1.46518);
   // Six-DOF real shapes and Polytec's analysis-2-with-complex-data form read too.
-  EXPECT_NO_THROW(ReadModeSet(Data("pyuff/uff55_translation_rotation.uff")));
-  EXPECT_EQ(ReadModeSet(Data("ufffiles-jl/dataset55_bad_format.unv")).modes.size(), 1u);
+  EXPECT_NO_THROW(ReadModeSet(CorpusData("pyuff/uff55_translation_rotation.uff")));
+  EXPECT_EQ(ReadModeSet(CorpusData("ufffiles-jl/dataset55_bad_format.unv")).modes.size(), 1u);
 }
 
 /// Every decoded dataset written and read back gives the same values (to printed precision),
@@ -420,7 +420,7 @@ TEST(UffCorpus, EveryDatasetRoundTrips) {
   for (const auto& [rel, expected] : kCorpus) {
     if (rel == "pyuff/dataset_milestone_in_header.uff") continue;
     SCOPED_TRACE(rel);
-    const auto original = ReadFile(Data(rel));
+    const auto original = ReadFile(CorpusData(rel));
     for (bool binary : {false, true}) {
       const fs::path p1 = Tmp("rt1.uff"), p2 = Tmp("rt2.uff");
       WriteFile(p1, original, {binary});

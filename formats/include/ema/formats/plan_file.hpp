@@ -31,4 +31,18 @@ struct Plan {
 /// (with the keys allowed there), a wrong type, a value out of range or a bad DOF.
 Plan ReadPlanFile(const std::filesystem::path& path);
 
+/// The TOML text of a plan (docs/plan-format.md) that ReadPlanFile reads back to the same Plan;
+/// `comment`: lines written first, each prefixed "# ". Numbers are written in the shortest form
+/// that reads back to the same double. The sensors of each set come from `sets` (ReadPlanFile
+/// makes hammer.roving_sets from them); a set's masses as ReadPlanFile gives them back: every
+/// sensor point holds an entry (a point missing from `masses` is written with 0 kg: no mass), and
+/// [plan] sensor_mass is written when all sets share one mass. std::invalid_argument when the plan
+/// holds what the format cannot say: a DOF that is not a node 0..999999999 with +-X/Y/Z, a mass at a
+/// point id outside 0..999999999, a seed beyond the int range the reader takes, a response quantity other
+/// than acceleration/velocity/displacement, a double hit or overload naming no set or reference.
+std::string PlanToToml(const Plan& plan, const std::string& comment = "");
+
+/// Writes PlanToToml atomically (WriteTextFileAtomically).
+void WritePlanFile(const std::filesystem::path& path, const Plan& plan, const std::string& comment = "");
+
 }  // namespace ema::formats

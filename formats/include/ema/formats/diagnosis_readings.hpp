@@ -1,0 +1,32 @@
+// The candidate readings of a diagnosis read back from DIAG.json (`ema diagnose --json`, cli.md
+// "ema diagnose"): each candidate's rank, probability, kind and target, and its effects whole, the
+// laws parsed by the model file's own law parser (so every law kind a model file takes is read
+// exactly as there). `ema plan --candidates` plans the test that tells competing readings apart.
+#pragma once
+
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "ema/model/model.hpp"
+
+namespace ema::formats {
+
+/// One candidate reading of a diagnosis, as DIAG.json (`ema diagnose --json`) holds it.
+struct DiagnosisReading {
+  int rank = 0;
+  double probability = std::numeric_limits<double>::quiet_NaN();  ///< NaN when null or absent
+  std::string kind, target;            ///< as candidates[] (several effects joined with '+'); "none" for the model as given
+  std::vector<model::Effect> effects;  ///< each effect whole: kind, target, parameters, law (empty for "none")
+};
+
+/// Every candidate of a DIAG.json, by rank (a stable sort: candidates of one rank keep the file's
+/// order). InputError naming the file (and the candidate's rank and key) when the file is not
+/// JSON, has no `candidates` array, or a candidate lacks rank/kind/target/effects or has an effect
+/// that is not {"kind", "target", "parameters": {name: number}, "law": "<inline TOML>"} as a
+/// model file's [[effect]] takes it (the parameters factor/value/mass/k; a law that parses).
+/// A law's relative curve `file =` paths resolve against the DIAG.json's folder.
+std::vector<DiagnosisReading> ReadDiagnosisReadings(const std::filesystem::path& path);
+
+}  // namespace ema::formats
