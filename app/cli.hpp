@@ -82,4 +82,5 @@ int RunSimulate(const std::vector<std::string>& args);
 int RunQuality(const std::vector<std::string>& args);
 int RunAmplitude(const std::vector<std::string>& args);
 int RunPick(const std::vector<std::string>& args);
+int RunPlan(const std::vector<std::string>& args);
 }  // namespace ema

@@ -25,6 +25,7 @@ const Command kCommands[] = {
     {"correlate", ema::RunCorrelate, "test modes against model modes: MAC, pairing, validation table"},
     {"diagnose", ema::RunDiagnose, "rank the physical effects the model is missing"},
     {"run", ema::RunRun, "the whole story from a project file, with an HTML report"},
+    {"plan", ema::RunPlan, "the test to run next: sensors, references, settings; --candidates: to tell readings apart"},
     {"simulate", ema::RunSimulate, "a roving hammer test of a model, as UFF 58 time data"},
     {"amplitude", ema::RunAmplitude, "does a mode depend on the excitation level? f and damping vs level"},
 };

@@ -24,6 +24,7 @@
 #include "ema/frf/quality.hpp"
 #include "ema/model/model.hpp"
 #include "ema/model/solve.hpp"
+#include "ema/planning/plan.hpp"
 
 namespace ema::app {
 
@@ -187,5 +188,27 @@ std::optional<SimulateConfig> ParseSimulateArgs(const std::vector<std::string>& 
 /// Simulates the test `plan` of `model` and writes the time records (config.output).
 std::vector<TimeRecord> RunSimulateStage(const SimulateConfig& config, const model::Model& model, formats::Plan plan,
                                          std::ostream& out);
+
+// ---- ema plan ----
+
+struct PlanConfig {
+  std::string model_path, output, json_path;
+  std::string candidates_path;       ///< DIAG.json whose rank 1 and look-alikes the plan separates
+  std::string keep_path;             ///< an earlier plan whose sets stay
+  planning::PlanOptions options;
+};
+
+struct PlanStageResult {
+  planning::TestPlan plan;
+  formats::Plan file;                ///< what PLAN.toml holds
+  nlohmann::json json;               ///< `ema plan --json`
+};
+
+std::optional<PlanConfig> ParsePlanArgs(const std::vector<std::string>& args);
+/// Plans the test of `model` (read from config.model_path by the command) to tell `readings`
+/// apart (none: for the modes alone), extending `keep` when given; writes PLAN.toml (and JSON).
+PlanStageResult RunPlanStage(const PlanConfig& config, const model::Model& model,
+                             const std::vector<planning::Reading>& readings, const std::optional<formats::Plan>& keep,
+                             std::ostream& out);
 
 }  // namespace ema::app
