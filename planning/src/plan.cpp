@@ -86,10 +86,10 @@ double AutoMacMax(const Eigen::MatrixXd& shapes, const std::vector<std::vector<i
 }
 
 // The model's modes in the setup, with enough of them for any band of interest.
-model::Solution SolveFor(const model::Model& m, const std::string& setup) {
+model::Solution SolveFor(const model::Model& m, const std::string& setup, int fe_modes = 40) {
   model::SolveOptions so;
   so.setup = setup;
-  so.max_modes = m.fe.Empty() ? 0 : 40;
+  so.max_modes = m.fe.Empty() ? 0 : fe_modes;
   return model::Solve(m, so);
 }
 
@@ -297,7 +297,8 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
                        "the reading '" + reading.label + "' does not apply to the model " + where + " (" + e.what() +
                            "); expected a diagnosis of this model");
     }
-    const model::Solution s = SolveFor(changed, options.setup);
+    // Modes up to the band's last and its neighbour (the counterpart search looks one further).
+    const model::Solution s = SolveFor(changed, options.setup, target.back() + 3);
     if (s.modes.dofs != modes.dofs)
       throw InputError(reading.origin.empty() ? where : reading.origin,
                        "the reading '" + reading.label + "' changes the test DOFs of the model " + where + "; expected a diagnosis of this model");
@@ -357,35 +358,107 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
     }
     return std::sqrt(sum);
   };
-  auto smallest_separation = [&](const std::vector<int>& set) {
-    const std::vector<int> rows = RowsOf(groups, set);
-    double worst = std::numeric_limits<double>::infinity();
-    for (size_t a = 0; a < predicted.size(); ++a)
-      for (size_t b = a + 1; b < predicted.size(); ++b) worst = std::min(worst, separation(a, b, rows));
-    return worst;
-  };
   const std::vector<int> for_modes = chosen;
   if (predicted.size() >= 2) {
+    // The exchange judges thousands of sets: per pair of readings and target mode, the sums Σx²,
+    // Σy², Σxy over a set's rows (real shapes: MAC = (Σxy)² / (Σx² Σy²)) and the nominal Σφ²
+    // (is the mode seen) are kept per candidate group, so a swap costs pairs × modes additions.
+    struct Sums {
+      double xx = 0.0, yy = 0.0, xy = 0.0;
+    };
+    const auto n_groups = groups.size();
+    std::vector<std::pair<size_t, size_t>> pairs;
+    for (size_t a = 0; a < n_readings; ++a)
+      for (size_t b = a + 1; b < n_readings; ++b) pairs.emplace_back(a, b);
+    const size_t slots = pairs.size() * static_cast<size_t>(m);
+    std::vector<Sums> contribution(slots * n_groups);
+    std::vector<double> seen_contribution(static_cast<size_t>(m) * n_groups, 0.0), frequency_term(slots, 0.0);
+    std::vector<char> usable(slots, 0);
+    for (size_t q = 0; q < pairs.size(); ++q) {
+      const auto [a, b] = pairs[q];
+      for (Eigen::Index j = 0; j < m; ++j) {
+        const size_t slot = q * static_cast<size_t>(m) + static_cast<size_t>(j);
+        const Eigen::Index ka = target[j], kb = partner[a * n_readings + b][static_cast<size_t>(j)];
+        if (kb < 0 || !excited(j)) continue;
+        usable[slot] = 1;
+        const double df = (predicted[a].hz(ka) - predicted[b].hz(kb)) / (options.frequency_sigma_rel * target_hz(j));
+        frequency_term[slot] = df * df;
+        for (size_t g = 0; g < n_groups; ++g)
+          for (int r : groups[g]) {
+            const double x = predicted[a].shapes(r, ka), y = predicted[b].shapes(r, kb);
+            Sums& c = contribution[slot * n_groups + g];
+            c.xx += x * x, c.yy += y * y, c.xy += x * y;
+          }
+      }
+    }
+    for (Eigen::Index j = 0; j < m; ++j)
+      for (size_t g = 0; g < n_groups; ++g)
+        for (int r : groups[g]) seen_contribution[static_cast<size_t>(j) * n_groups + g] += shapes(r, j) * shapes(r, j);
+    struct State {
+      std::vector<Sums> sums;
+      std::vector<double> seen;
+      size_t rows = 0;
+    };
+    auto add = [&](State* st, int g, double sign) {
+      for (size_t slot = 0; slot < slots; ++slot) {
+        const Sums& c = contribution[slot * n_groups + static_cast<size_t>(g)];
+        st->sums[slot].xx += sign * c.xx, st->sums[slot].yy += sign * c.yy, st->sums[slot].xy += sign * c.xy;
+      }
+      for (Eigen::Index j = 0; j < m; ++j) st->seen[static_cast<size_t>(j)] += sign * seen_contribution[static_cast<size_t>(j) * n_groups + g];
+      st->rows = sign > 0 ? st->rows + groups[g].size() : st->rows - groups[g].size();
+    };
+    auto state_of = [&](const std::vector<int>& set) {
+      State st{std::vector<Sums>(slots), std::vector<double>(static_cast<size_t>(m), 0.0), 0};
+      for (int g : set) add(&st, g, 1.0);
+      return st;
+    };
+    // The smallest over the pairs of `separation` below (the reported figure), from the sums.
+    auto smallest_of = [&](const State& st) {
+      double worst = std::numeric_limits<double>::infinity();
+      for (size_t q = 0; q < pairs.size(); ++q) {
+        double sum = 0.0;
+        for (Eigen::Index j = 0; j < m; ++j) {
+          const size_t slot = q * static_cast<size_t>(m) + static_cast<size_t>(j);
+          if (!usable[slot] || st.rows == 0 || st.seen[static_cast<size_t>(j)] / static_cast<double>(st.rows) < kSeen * kSeen * mean_square(j))
+            continue;
+          const Sums& t = st.sums[slot];
+          const double mac = t.xx > 0.0 && t.yy > 0.0 ? t.xy * t.xy / (t.xx * t.yy) : 1.0;
+          const double shape = (1.0 - mac) / options.shape_sigma;
+          sum += frequency_term[slot] + shape * shape;
+        }
+        worst = std::min(worst, std::sqrt(sum));
+      }
+      return worst;
+    };
     // Exchange for the smallest separation, keeping the AutoMAC within its limit (or no worse
     // than the modes-only plan's when that already exceeds it).
     const double automac_bound = std::max(options.automac_limit, AutoMacMax(shapes, groups, chosen));
-    double value = smallest_separation(chosen);
+    State current = state_of(chosen);
+    double value = smallest_of(current);
+    std::vector<char> in_set(n_groups, 0);
+    for (int g : chosen) in_set[static_cast<size_t>(g)] = 1;
     for (int pass = 0; pass < 4 * total; ++pass) {
       int out_group = -1, in_group = -1;
       double best = value;
       for (size_t k = 0; k < chosen.size(); ++k) {
         if (is_fixed[chosen[k]]) continue;
-        for (int u = 0; u < static_cast<int>(groups.size()); ++u) {
-          if (std::find(chosen.begin(), chosen.end(), u) != chosen.end()) continue;
-          std::vector<int> trial = chosen;
-          trial[k] = u;
-          const double v = smallest_separation(trial);
-          if (v > best * (1.0 + 1e-6) + 1e-9 && AutoMacMax(shapes, groups, trial) <= automac_bound + 1e-9)
-            best = v, out_group = chosen[k], in_group = u;
+        State without = current;
+        add(&without, chosen[k], -1.0);
+        for (int u = 0; u < static_cast<int>(n_groups); ++u) {
+          if (in_set[static_cast<size_t>(u)]) continue;
+          State trial = without;
+          add(&trial, u, 1.0);
+          const double v = smallest_of(trial);
+          if (!(v > best * (1.0 + 1e-6) + 1e-9)) continue;
+          std::vector<int> set = chosen;
+          set[k] = u;
+          if (AutoMacMax(shapes, groups, set) <= automac_bound + 1e-9) best = v, out_group = chosen[k], in_group = u;
         }
       }
       if (out_group < 0) break;
       std::replace(chosen.begin(), chosen.end(), out_group, in_group);
+      in_set[static_cast<size_t>(out_group)] = 0, in_set[static_cast<size_t>(in_group)] = 1;
+      current = state_of(chosen);
       value = best;
     }
     const std::vector<int> before = keep.empty() ? for_modes : fixed;

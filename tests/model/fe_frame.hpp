@@ -14,8 +14,10 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -32,6 +34,9 @@ struct FrameSpec {
   double length = 20.0, width = 2.0;  ///< m
   double bearing_k = 5e8;      ///< N/m per translation per bearing
   double part_uncertainty = 0.3;
+  /// Stated uncertainty of the bearing parts B1.. and of the deck part; NaN: part_uncertainty.
+  double bearing_uncertainty = std::numeric_limits<double>::quiet_NaN();
+  double deck_uncertainty = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct FrameFiles {
@@ -143,7 +148,10 @@ inline FrameFiles WriteFrame(const std::filesystem::path& dir, const FrameSpec& 
     const std::string group = name[0] == 'G' ? "girders" : name[0] == 'X' ? "cross" : name[0] == 'B' ? "bearings" : "";
     toml << "[[fe.part]]\nname = \"" << name << "\"\n";
     if (!group.empty()) toml << "group = \"" << group << "\"\n";
-    toml << "stiffness = \"K_" << name << ".mtx\"\nuncertainty = " << spec.part_uncertainty << "\n\n";
+    const double stated = name[0] == 'B' && !std::isnan(spec.bearing_uncertainty) ? spec.bearing_uncertainty
+                          : name == "deck" && !std::isnan(spec.deck_uncertainty) ? spec.deck_uncertainty
+                                                                                 : spec.part_uncertainty;
+    toml << "stiffness = \"K_" << name << ".mtx\"\nuncertainty = " << stated << "\n\n";
     ++files.parts;
   }
   Eigen::SparseMatrix<double> m(n, n);
