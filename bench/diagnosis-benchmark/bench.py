@@ -5,6 +5,7 @@
   bench.py gather --work DIR [--doc docs/diagnosis-benchmark.md --svg docs/img/diagnosis-calibration.svg]
   bench.py check  --ema EMA --cases 0:21 --floor 0.9 [--work DIR]      (the CI test)
   bench.py run    --ema EMA --family form --cases 0:60 [--jobs N]       (the model-form family)
+  bench.py run    --ema EMA --cases 0:200 --replan                        (look-alikes: the follow-up test ema plan makes)
 
 `run` generates each case (cases.py), puts it through the real chain with the built `ema`
 (simulate -> frf -> fit -> diagnose -> correlate) and writes WORK/scores/case-NNNN.json; cases
@@ -238,7 +239,67 @@ def form_scores(ema, case, folder, diag, lo, hi, shifts):
             "model_error_rank1": first.get("model_error")}
 
 
-def run_case(ema, index, seed, work, keep, family=None):
+def look_alikes(diag):
+    """Rank 1 and the readings within a factor 20 of its probability (the first screen's rule,
+    docs/plan.md): what `ema plan --candidates` separates. "none" left out."""
+    cands = diag["candidates"]
+    p1 = cands[0].get("probability") or 0.0
+    return [c for c in cands if c["kind"] != "none" and c.get("effects")
+            and (c["rank"] == 1 or (c.get("probability") or 0.0) >= max(0.05 * p1, 0.001))]
+
+
+def replan(ema, case, folder, tests, lo, hi, times, index):
+    """The follow-up test of a diagnosis that left look-alikes (issue 40): `ema plan --candidates
+    diag.json --keep <the plan>` adds one roving set where the readings differ most, the truth is
+    tested again with the extended plan (a new noise seed), fitted and diagnosed. Single-setup
+    cases only. Returns what the replanned diagnosis says, or None when rank 1 had no look-alike."""
+    diag = read_json(os.path.join(folder, "diag.json"))
+    readings = look_alikes(diag)
+    if len(case["setups"]) != 1 or len(readings) < 2:
+        return None
+    s, _ = tests[0]
+    tag = s or "test"
+    kept = f"plan-{tag}.toml"
+    with open(os.path.join(folder, kept)) as f:
+        plan_text = f.read()
+    sets = [[x for x in m.split(",") if x.strip()] for m in re.findall(r"sensors = \[([^\]]*)\]", plan_text)]
+    with open(os.path.join(folder, "nominal.toml")) as f:
+        candidates = 3 * len(re.findall(r"(?m)^\[\[point\]\]", f.read()))
+    free = candidates - len({x.strip() for st in sets for x in st})
+    per_set = min(len(sets[0]) if sets else 8, free)
+    if per_set < 1:
+        return {"readings": [f"{c['kind']} on {c['target']}" for c in readings], "skipped": "every DOF already measured"}
+    args = ["plan", "nominal.toml", "--candidates", "diag.json", "--keep", kept, "--sensors", str(per_set),
+            "--band", f"{lo:.3f}:{hi:.3f}", "-o", "replan.toml", "--json", "replan.json"]
+    times["replan"] = run_ema(ema, args, folder, "replan.log")
+    with open(os.path.join(folder, "replan.toml")) as f:
+        text = f.read()
+    text = re.sub(r"(?m)^seed = .*$", f"seed = {1000 * index + 77}", text)
+    with open(os.path.join(folder, "replan.toml"), "w") as f:
+        f.write(text)
+    sflag = ["--setup", s] if s else []
+    for step, args in (("simulate", ["simulate", "simulate.toml", "--plan", "replan.toml", "-o", "time-replan.unv",
+                                     "--binary"] + sflag),
+                       ("frf", ["frf", "time-replan.unv", "-o", "frf-replan.unv"]),
+                       ("fit", ["fit", "frf-replan.unv", "-o", "modes-replan.unv", "--band", f"{lo:.3f}:{hi:.3f}",
+                                "--json", "modes-replan.json"]),
+                       ("diagnose", ["diagnose", "nominal.toml", "--test", f"{s}=modes-replan.unv" if s else "modes-replan.unv",
+                                     "--json", "diag-replan.json"])):
+        times[step + "_replan"] = run_ema(ema, args, folder, f"{step}-replan.log")
+    after = read_json(os.path.join(folder, "diag-replan.json"))
+    plan = read_json(os.path.join(folder, "replan.json"))
+    truth = sorted((e["kind"], e["target"]) for e in case["truth"])
+    first = after["candidates"][0]
+    return {"readings": [f"{c['kind']} on {c['target']}" for c in readings],
+            "truth_among_readings": any(effect_set(c) == truth for c in readings),
+            "separations": plan.get("separations", []),
+            "right_before": effect_set(diag["candidates"][0]) == truth,
+            "p_rank1_before": diag["candidates"][0].get("probability"),
+            "right_after": effect_set(first) == truth, "p_rank1_after": first.get("probability"),
+            "rank1_after": {"kind": first["kind"], "target": first["target"]}}
+
+
+def run_case(ema, index, seed, work, keep, family=None, replan_lookalikes=False):
     folder = os.path.join(work, "cases", f"{index:04d}")
     times = {}
     t0 = time.monotonic()
@@ -277,6 +338,8 @@ def run_case(ema, index, seed, work, keep, family=None):
     result = score(case, diag, corr_after, corr_before, times)
     if case["family"] == cases.FORM_FAMILY:
         result.update(form_scores(ema, case, folder, diag, lo, hi, shifts))
+    if replan_lookalikes:
+        result["replan"] = replan(ema, case, folder, tests, lo, hi, times, index)
     result.update({"attempt": case["attempt"], "set_aside": set_aside, "effect_shift_pct": shifts,
                    "band_hz": [lo, hi], "sample_rate_hz": fs, "samples": samples, "pulse_duration_s": pulse,
                    "truth_modes_in_band": n_modes,
@@ -287,11 +350,11 @@ def run_case(ema, index, seed, work, keep, family=None):
     return result
 
 
-def run_one(ema, index, seed, work, keep, family=None):
+def run_one(ema, index, seed, work, keep, family=None, replan_lookalikes=False):
     """One case, never raising: a failed step is a scored failure with its message."""
     out = os.path.join(work, "scores", f"case-{index:04d}.json")
     try:
-        result = run_case(ema, index, seed, work, keep, family)
+        result = run_case(ema, index, seed, work, keep, family, replan_lookalikes)
     except Exception as e:  # noqa: BLE001 — any failure of one case is that case's score, never the run's end
         case = cases.make_case(index, seed, 0, family)
         drawn = os.path.join(work, "cases", f"{index:04d}", "case.json")
@@ -336,7 +399,8 @@ def run_range(args):
     start = time.monotonic()
     results = []
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        futures = {pool.submit(run_one, ema, i, args.seed, args.work, args.keep, args.family): i for i in indices}
+        futures = {pool.submit(run_one, ema, i, args.seed, args.work, args.keep, args.family,
+                               getattr(args, "replan", False)): i for i in indices}
         for fut in concurrent.futures.as_completed(futures):
             r = fut.result()
             results.append(r)
@@ -366,6 +430,9 @@ def main():
         q.add_argument("--keep", action="store_true", help="keep each case's files (default: scores only)")
         q.add_argument("--family", choices=[cases.FORM_FAMILY], default=None,
                        help="the model-form family (truth richer than the model; default: the four families)")
+        q.add_argument("--replan", action="store_true",
+                       help="when rank 1 has look-alikes, plan the follow-up test (ema plan --candidates --keep), "
+                            "test again and diagnose (docs/plan.md)")
         if name == "check":
             q.add_argument("--floor", type=float, required=True, help="minimum share right at rank 1")
     g = sub.add_parser("gather")
