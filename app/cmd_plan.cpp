@@ -22,28 +22,6 @@
 namespace ema {
 namespace {
 
-// The readings a diagnosis cannot tell apart: rank 1 and every other candidate within a factor
-// 20 of its probability (the first screen's look-alike rule, cmd_diagnose.cpp), "none" left out,
-// at most `limit`.
-std::vector<planning::Reading> LookAlikeReadings(const std::vector<formats::DiagnosisReading>& all,
-                                                 const std::string& path, size_t limit = 10) {
-  std::vector<planning::Reading> out;
-  if (all.empty()) return out;
-  const formats::DiagnosisReading* first = nullptr;
-  for (const auto& r : all)
-    if (r.rank == 1) first = &r;
-  if (!first) throw InputError(path, "no candidate of rank 1; expected the `ema diagnose --json` of a diagnosis");
-  const double p1 = first->probability;
-  for (const auto& r : all) {
-    if (r.effects.empty() || r.kind == "none") continue;
-    const bool alike = r.rank == 1 || (r.probability >= 0.05 * p1 && r.probability >= 0.001);
-    if (!alike) continue;
-    out.push_back({r.kind + " on " + r.target, r.effects, path + ", candidate rank " + std::to_string(r.rank)});
-    if (out.size() == limit) break;
-  }
-  return out;
-}
-
 std::string Percent(double share) { return FixedPoint(100.0 * share, 0) + " %"; }
 
 }  // namespace
@@ -92,41 +70,18 @@ app::PlanStageResult app::RunPlanStage(const PlanConfig& config, const model::Mo
     for (const formats::RovingSet& s : keep->sets) kept_sets.push_back(s.sensors);
   planning::PlanOptions options = config.options;
   if (keep && options.setup.empty()) options.setup = keep->setup;  // the kept test's setup
-  result.plan = planning::PlanTest(model, options, readings, kept_sets);
+  result.plan = planning::PlanTest(model, options, readings, kept_sets, keep ? keep->hammer.references : std::vector<Dof>{});
+  if (keep) formats::AdoptKeptSettings(*keep, &result.plan);
   const planning::TestPlan& plan = result.plan;
-
   // The plan file: a kept plan's settings and sets stay as they were, new sets follow.
-  formats::Plan& file = result.file;
-  if (keep) {
-    file = *keep;
-  } else {
-    file.setup = options.setup;
-    file.hammer.references = plan.references;
-    file.hammer.sample_rate_hz = plan.sample_rate_hz;
-    file.hammer.samples_per_record = plan.samples;
-    file.hammer.pulse_duration_s = plan.pulse_duration_s;
-    file.hammer.impacts_per_reference = plan.impacts;
-    // A rehearsal has the noise of a careful test (1 % of each channel's rms), as the samples do.
-    file.hammer.force_noise = 0.01;
-    file.hammer.response_noise = 0.01;
-  }
-  for (size_t s = kept_sets.size(); s < plan.sets.size(); ++s) {
-    formats::RovingSet set;
-    set.name = "set " + std::to_string(s + 1);
-    set.sensors = plan.sets[s];
-    if (plan.sensor_mass_kg > 0.0)
-      for (const Dof& d : set.sensors) set.masses[d.node] = plan.sensor_mass_kg;
-    file.sets.push_back(set);
-  }
-  file.hammer.roving_sets.clear();
-  for (const formats::RovingSet& s : file.sets) file.hammer.roving_sets.push_back(s.sensors);
+  result.file = formats::PlanFileOf(plan, keep, options.setup);
   const bool with_separations = !config.candidates_path.empty();
   result.json = formats::TestPlanJson(plan, with_separations);
 
   std::string comment = "Test plan of " + config.model_path + " made by `ema plan` (docs/plan.md).";
   if (keep) comment += "\nExtends " + config.keep_path + ": its settings and first " + std::to_string(kept_sets.size()) + " set(s) as they were.";
   if (with_separations) comment += "\nSensors placed to tell apart the look-alike readings of " + config.candidates_path + ".";
-  formats::WritePlanFile(config.output, file, comment);
+  formats::WritePlanFile(config.output, result.file, comment);
   if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, result.json.dump(2) + "\n");
 
   // The screen: what the plan sees, how sure, what it could not do.
@@ -174,7 +129,7 @@ int RunPlan(const std::vector<std::string>& args) {
     std::error_code ec;
     if (!std::filesystem::exists(config->candidates_path, ec))
       throw InputError(config->candidates_path, "diagnosis file not found; expected the DIAG.json of `ema diagnose --json`");
-    readings = LookAlikeReadings(formats::ReadDiagnosisReadings(config->candidates_path), config->candidates_path);
+    readings = formats::LookAlikeReadings(formats::ReadDiagnosisReadings(config->candidates_path), config->candidates_path);
   }
   std::optional<formats::Plan> keep;
   if (!config->keep_path.empty()) {

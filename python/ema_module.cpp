@@ -22,11 +22,13 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "amplitude_levels.hpp"
+#include "cli.hpp"
 #include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/core/error.hpp"
 #include "ema/correlation/correlate.hpp"
@@ -35,13 +37,17 @@
 #include "ema/curvefit/fit.hpp"
 #include "ema/curvefit/mode_indicators.hpp"
 #include "ema/diagnose/diagnose.hpp"
+#include "ema/formats/diagnosis_readings.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/json_codecs.hpp"
 #include "ema/formats/model_file.hpp"
+#include "ema/formats/plan_file.hpp"
+#include "ema/formats/plan_json.hpp"
 #include "ema/frf/hammer_frf.hpp"
 #include "ema/frf/quality.hpp"
 #include "ema/model/effects.hpp"
 #include "ema/model/solve.hpp"
+#include "ema/planning/plan.hpp"
 #include "quality_json.hpp"
 
 #ifndef EMA_VERSION
@@ -388,8 +394,8 @@ ModeSet ModeSetFromArrays(const py::dict& d, const std::string& label) {
 /// A file that is removed when it goes out of scope.
 struct TemporaryFile {
   std::filesystem::path path;
-  explicit TemporaryFile(const std::string& text) {
-    std::string name = (std::filesystem::temp_directory_path() / "ema-modes-XXXXXX").string();
+  explicit TemporaryFile(const std::string& text, const std::string& prefix = "ema-modes") {
+    std::string name = (std::filesystem::temp_directory_path() / (prefix + "-XXXXXX")).string();
     const int fd = mkstemp(name.data());
     if (fd < 0) throw std::runtime_error("cannot create a temporary file in " + std::filesystem::temp_directory_path().string());
     close(fd);
@@ -412,6 +418,23 @@ std::string ReplaceAll(std::string text, const std::string& from, const std::str
   return text;
 }
 
+/// A dict as strict JSON text (numpy numbers and arrays as plain numbers and lists); InputError
+/// naming `label` and `layout` (the layout expected) for what JSON cannot hold.
+std::string JsonText(const py::handle& d, const std::string& label, const std::string& layout) {
+  const py::module_ json = py::module_::import("json");
+  const py::cpp_function plain([](const py::object& o) -> py::object {
+    if (py::hasattr(o, "tolist")) return o.attr("tolist")();
+    throw py::type_error("a " + TypeName(o) + " is not a number, list or dict");
+  });
+  try {
+    return json.attr("dumps")(d, py::arg("allow_nan") = false, py::arg("default") = plain).cast<std::string>();
+  } catch (py::error_already_set& e) {
+    if (!e.matches(PyExc_ValueError) && !e.matches(PyExc_TypeError)) throw;
+    throw ema::InputError(label, "not in " + layout + " (" + py::str(e.value()).cast<std::string>() +
+                                     "); numbers must be finite: None for a value not known");
+  }
+}
+
 /// A dict in `ema fit --json`'s layout ({"modes": [{"frequency_hz", "frequency_std_hz",
 /// "damping_ratio", "shape": [{"node", "dir", "value"}]}]}, model-format.md): read by the reader of
 /// MODES.json files itself, so a dict means what the same JSON in a file means to `ema diagnose`
@@ -419,20 +442,7 @@ std::string ReplaceAll(std::string text, const std::string& from, const std::str
 /// dict lists them ("roving_sets", "reference"), go to *roving_sets / *reference.
 ModeSet ModeSetFromJsonLayout(const py::handle& d, const std::string& label, std::vector<std::vector<int>>* roving_sets,
                               Dof* reference) {
-  const py::module_ json = py::module_::import("json");
-  // numpy numbers and arrays as plain numbers and lists.
-  const py::cpp_function plain([](const py::object& o) -> py::object {
-    if (py::hasattr(o, "tolist")) return o.attr("tolist")();
-    throw py::type_error("a " + TypeName(o) + " is not a number, list or dict");
-  });
-  std::string text;
-  try {
-    text = json.attr("dumps")(d, py::arg("allow_nan") = false, py::arg("default") = plain).cast<std::string>();
-  } catch (py::error_already_set& e) {
-    if (!e.matches(PyExc_ValueError) && !e.matches(PyExc_TypeError)) throw;
-    throw ema::InputError(label, "not in `ema fit --json`'s layout (" + py::str(e.value()).cast<std::string>() +
-                                     "); numbers must be finite: None for a value not known");
-  }
+  const std::string text = JsonText(d, label, "`ema fit --json`'s layout");
   const TemporaryFile file(text);
   ModeSet set;
   try {
@@ -783,13 +793,48 @@ ema::diagnose::SetupModes ToSetupModes(const std::string& setup, const py::objec
   return test;
 }
 
+// ------------------------------------------------------------------------------------------------
+// Test planning (`ema plan`, docs/plan.md).
+
+/// The candidate readings of a diagnosis: a DIAG.json path, or the dict ema.diagnose returns (any
+/// mapping in DIAG.json's layout), read by the DIAG.json reader itself through a temporary file so
+/// that it means what the same JSON in a file means to `ema plan --candidates`. *origin: the name
+/// messages give it (the path, or "candidates").
+std::vector<ema::formats::DiagnosisReading> DiagnosisReadingsOf(const py::object& o, std::string* origin) {
+  if (IsPath(o)) {
+    const std::string path = PathOf(o);
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec))
+      throw ema::InputError(path, "diagnosis file not found; expected the DIAG.json of `ema diagnose --json`");
+    *origin = path;
+    return ema::formats::ReadDiagnosisReadings(path);
+  }
+  if (!IsMapping(o))
+    throw py::type_error("candidates: expected None, a DIAG.json path or the dict ema.diagnose returns, found " + TypeName(o));
+  *origin = "candidates";
+  const TemporaryFile file(JsonText(py::dict(o), "candidates", "the layout of `ema diagnose --json` (what ema.diagnose returns)"),
+                           "ema-diag");
+  try {
+    return ema::formats::ReadDiagnosisReadings(file.path);
+  } catch (const ema::InputError& e) {
+    throw ema::InputError(ReplaceAll(e.what(), file.path.string(), "candidates"));
+  }
+}
+
+/// None, or the path `o` names; TypeError naming the argument otherwise.
+std::string PathOrNone(const py::object& o, const std::string& name, const std::string& what) {
+  if (o.is_none()) return "";
+  if (!IsPath(o)) throw py::type_error(name + ": expected None or the path of " + what + ", found " + TypeName(o));
+  return PathOf(o);
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_ema, m) {
   m.doc() =
       "ema: experimental modal analysis (impact-hammer tests -> FRFs -> PolyMAX modes -> correlation with a\n"
-      "model -> which physics the model misses -> data quality). The same C++ library as the `ema` command\n"
-      "line, on numpy arrays.\n\n"
+      "model -> which physics the model misses -> data quality -> the next test's plan). The same C++ library\n"
+      "as the `ema` command line, on numpy arrays.\n\n"
       "FRF sets are dicts: frequency_hz (n_lines,), outputs/references [(node, '+Z'), ...],\n"
       "h (n_references, n_lines, n_outputs) complex, coherence (same shape) or None, averages\n"
       "(n_references, n_outputs) or None, quantity ('acceleration', 'velocity', 'displacement').\n"
@@ -1185,6 +1230,115 @@ PYBIND11_MODULE(_ema, m) {
       "each with kind, target, parameters, uncertainty, probability, mean_abs_frequency_error_pct, mean_mac,\n"
       "score, description, effects, the evidence per test mode), 'baseline', 'effect_probabilities', 'groups',\n"
       "'steps', 'explanation', 'modes' (every test mode before/after rank 1) and the options used.");
+
+  const ema::planning::PlanOptions plan_defaults;
+  m.def(
+      "plan",
+      [](const py::object& model_arg, const std::string& setup, const py::object& band, int sensors, int sets, bool triaxial,
+         int references, double sensor_mass, int impacts, const py::object& candidates, const py::object& keep,
+         const py::object& output) {
+        namespace fm = ema::formats;
+        // The arguments first, as `ema plan` parses its options: nothing is read or written after a bad one.
+        ema::planning::PlanOptions o;
+        o.setup = setup;
+        std::tie(o.band_lo_hz, o.band_hi_hz) = Band(band);
+        auto at_least_one = [](int value, const std::string& name, const std::string& what) {
+          if (value < 1) throw ema::UsageError(name + ": expected >= 1 (" + what + "), got " + std::to_string(value));
+        };
+        at_least_one(sensors, "sensors", "the sensors mounted at once (test points with triaxial=True, else DOFs)");
+        at_least_one(sets, "sets", "the number of roving sets");
+        at_least_one(references, "references", "the number of hammer DOFs");
+        at_least_one(impacts, "impacts", "the impacts per reference and set");
+        if (!(sensor_mass >= 0.0) || !std::isfinite(sensor_mass))
+          throw ema::UsageError("sensor_mass: expected a mass in kg >= 0 per sensor point (0.0112 for an 11.2 g accelerometer)");
+        o.sensors_per_set = sensors;
+        o.sets = sets;
+        o.triaxial = triaxial;
+        o.references = references;
+        o.sensor_mass_kg = sensor_mass;
+        o.impacts = impacts;
+        if (std::string why; !o.IsValid(&why)) throw ema::UsageError(why);
+        if (!candidates.is_none() && !IsPath(candidates) && !IsMapping(candidates))
+          throw py::type_error("candidates: expected None, a DIAG.json path or the dict ema.diagnose returns, found " +
+                               TypeName(candidates));
+        const std::string model_path = IsPath(model_arg) ? PathOf(model_arg) : "";
+        const std::string candidates_path = !candidates.is_none() && IsPath(candidates) ? PathOf(candidates) : "";
+        const std::string keep_path = PathOrNone(keep, "keep", "an earlier plan (TOML)");
+        const std::string output_path = PathOrNone(output, "output", "the plan file to write (TOML)");
+        if (!output_path.empty()) {
+          try {
+            ema::cli::RefuseOutputsOverInputs({{"model", model_path}, {"candidates", candidates_path}, {"keep", keep_path}},
+                                              {{"output", output_path}});
+          } catch (const ema::UsageError& e) {
+            throw ema::UsageError(std::string("output: ") + e.what());
+          }
+        }
+
+        const ema::model::Model model = ToModel(model_arg);
+        std::vector<ema::planning::Reading> readings;
+        std::string candidates_origin;
+        if (!candidates.is_none()) {
+          const std::vector<fm::DiagnosisReading> all = DiagnosisReadingsOf(candidates, &candidates_origin);
+          readings = fm::LookAlikeReadings(all, candidates_origin);
+        }
+        std::optional<fm::Plan> kept;
+        if (!keep_path.empty()) {
+          std::error_code ec;
+          if (!std::filesystem::exists(keep_path, ec)) throw ema::InputError(keep_path, "plan file not found");
+          kept = fm::ReadPlanFile(keep_path);
+        }
+
+        // What `ema plan` does with them (formats::PlanFileOf, as app/cmd_plan.cpp): the plan, then
+        // the plan file — a kept plan's settings and sets as they were, new sets after.
+        std::vector<std::vector<Dof>> kept_sets;
+        if (kept)
+          for (const fm::RovingSet& s : kept->sets) kept_sets.push_back(s.sensors);
+        if (kept && o.setup.empty()) o.setup = kept->setup;  // the kept test's setup
+        ema::planning::TestPlan plan =
+            ema::planning::PlanTest(model, o, readings, kept_sets, kept ? kept->hammer.references : std::vector<Dof>{});
+        if (kept) fm::AdoptKeptSettings(*kept, &plan);
+        const fm::Plan file = fm::PlanFileOf(plan, kept, o.setup);
+
+        std::string comment = "Test plan of " + (model_path.empty() ? std::string("a model built in Python") : model_path) +
+                              " made by ema.plan (docs/plan.md).";
+        if (kept)
+          comment += "\nExtends " + keep_path + ": its settings and first " + std::to_string(kept_sets.size()) + " set(s) as they were.";
+        if (!candidates.is_none()) comment += "\nSensors placed to tell apart the look-alike readings of " + candidates_origin + ".";
+        py::dict d(FromJson(fm::TestPlanJson(plan, !candidates.is_none())));
+        d["plan_toml"] = fm::PlanToToml(file, comment);
+        if (!output_path.empty()) fm::WritePlanFile(output_path, file, comment);
+        return d;
+      },
+      py::arg("model"), py::kw_only(), py::arg("setup") = "", py::arg("band") = py::none(),
+      py::arg("sensors") = plan_defaults.sensors_per_set, py::arg("sets") = plan_defaults.sets,
+      py::arg("triaxial") = plan_defaults.triaxial, py::arg("references") = plan_defaults.references,
+      py::arg("sensor_mass") = plan_defaults.sensor_mass_kg, py::arg("impacts") = plan_defaults.impacts,
+      py::arg("candidates") = py::none(), py::arg("keep") = py::none(), py::arg("output") = py::none(),
+      "The test to run next, as `ema plan` (docs/plan.md): sensors that see the band's modes distinctly\n"
+      "(effective independence, then exchange; AutoMAC kept below 0.1), hammer references that excite them\n"
+      "all, acquisition settings from band and damping — and with `candidates` the sensors that tell a\n"
+      "diagnosis's look-alike readings apart.\n\n"
+      "model: a model file (TOML), or an FE model built from parts in Python (see help(ema.model_modes)).\n"
+      "Keyword options as the CLI's: setup (the model setup the test is made in, '' = nominal), band ((lo, hi)\n"
+      "in Hz; None: up to 1.25 x the 6th mode, or the last below a gap of 3x), sensors (mounted at once: test\n"
+      "points with triaxial=True, else DOFs), sets (roving sets), triaxial (each sensor measures X, Y and Z at\n"
+      "one point), references (hammer DOFs), sensor_mass (kg per sensor point, written to the plan), impacts\n"
+      "(per reference and set).\n"
+      "candidates: None, the path of a DIAG.json (`ema diagnose --json`), or the dict ema.diagnose returns:\n"
+      "  rank 1 and every other candidate within a factor 20 of its probability (at least 0.001; 'none' left\n"
+      "  out; at most 10) are the readings the plan separates. A law's relative `file =` path in a dict's\n"
+      "  effects resolves against the temporary folder: give absolute paths there (ema.diagnose writes laws\n"
+      "  inline, without files).\n"
+      "keep: None or the path of an earlier plan (TOML): its settings and sets stay, `sets` new ones are added.\n"
+      "output: None or the path to write the plan file (PLAN.toml, what `ema simulate --plan` reads); an\n"
+      "  output naming an input (model, candidates, keep) is refused (ValueError).\n\n"
+      "Returns PLAN.json's layout (`ema plan --json`) as a dict: sensors, references, sets [{name, sensors}],\n"
+      "modes [{frequency_hz, observability, damping_ratio, reference_participation, excited}],\n"
+      "automac_max_offdiagonal, automac, band_hz, acquisition {sample_rate_hz, samples, record_length_s,\n"
+      "pulse_duration_s, impacts, sensor_mass_kg}, notes, with candidates separations [{a, b, sigma_before,\n"
+      "sigma_after}]; and plan_toml, the text of the plan file. ValueError (ema.InputError / ema.UsageError)\n"
+      "for a band holding no model mode, more sensor points than the model has, a diagnosis of another model,\n"
+      "an option out of range; TypeError for a band that is not (lo, hi) or an argument of the wrong type.");
 
   m.def(
       "quality",

@@ -1,6 +1,7 @@
 // PLAN.json (`ema plan --json`).
 #include "ema/formats/plan_json.hpp"
 
+#include "ema/core/error.hpp"
 #include "ema/formats/json_codecs.hpp"
 
 namespace ema::formats {
@@ -44,6 +45,59 @@ nlohmann::json TestPlanJson(const planning::TestPlan& plan, bool with_separation
                                     {"sigma_after", NumberOrNull(s.sigma_after)}});
   }
   return ValidUtf8(std::move(out));
+}
+
+std::vector<planning::Reading> LookAlikeReadings(const std::vector<DiagnosisReading>& all, const std::string& origin,
+                                                 size_t limit) {
+  std::vector<planning::Reading> out;
+  if (all.empty()) return out;
+  const DiagnosisReading* first = nullptr;
+  for (const auto& r : all)
+    if (r.rank == 1 && !first) first = &r;
+  if (!first) throw InputError(origin, "no candidate of rank 1; expected the `ema diagnose --json` of a diagnosis");
+  const double p1 = first->probability;
+  for (const auto& r : all) {
+    if (r.effects.empty() || r.kind == "none") continue;
+    const bool alike = r.rank == 1 || (r.probability >= 0.05 * p1 && r.probability >= 0.001);
+    if (!alike) continue;
+    out.push_back({r.kind + " on " + r.target, r.effects, origin + ", candidate rank " + std::to_string(r.rank)});
+    if (out.size() == limit) break;
+  }
+  return out;
+}
+
+Plan PlanFileOf(const planning::TestPlan& plan, const std::optional<Plan>& keep, const std::string& setup) {
+  Plan file;
+  if (keep) {
+    file = *keep;
+  } else {
+    file.hammer.references = plan.references;
+    file.hammer.sample_rate_hz = plan.sample_rate_hz;
+    file.hammer.samples_per_record = plan.samples;
+    file.hammer.pulse_duration_s = plan.pulse_duration_s;
+    file.hammer.impacts_per_reference = plan.impacts;
+    file.hammer.force_noise = 0.01;
+    file.hammer.response_noise = 0.01;
+  }
+  file.setup = setup;
+  for (size_t s = file.sets.size(); s < plan.sets.size(); ++s) {
+    RovingSet set;
+    set.name = "set " + std::to_string(s + 1);
+    set.sensors = plan.sets[s];
+    if (plan.sensor_mass_kg > 0.0)
+      for (const Dof& d : set.sensors) set.masses[d.node] = plan.sensor_mass_kg;
+    file.sets.push_back(set);
+  }
+  file.hammer.roving_sets.clear();
+  for (const RovingSet& s : file.sets) file.hammer.roving_sets.push_back(s.sensors);
+  return file;
+}
+
+void AdoptKeptSettings(const Plan& keep, planning::TestPlan* plan) {
+  plan->sample_rate_hz = keep.hammer.sample_rate_hz;
+  plan->samples = keep.hammer.samples_per_record;
+  plan->pulse_duration_s = keep.hammer.pulse_duration_s;
+  plan->impacts = keep.hammer.impacts_per_reference;
 }
 
 }  // namespace ema::formats

@@ -20,8 +20,9 @@ namespace ema::planning {
 
 bool PlanOptions::IsValid(std::string* why) const {
   std::string bad;
-  if (!(band_lo_hz >= 0.0) || !std::isfinite(band_hi_hz)) bad = "the band must be 0 <= LO < HI (Hz)";
-  else if (band_hi_hz > 0.0 && !(band_hi_hz > band_lo_hz)) bad = "the band must be 0 <= LO < HI (Hz)";
+  const bool band_unset = band_lo_hz == 0.0 && band_hi_hz == 0.0;
+  if (!band_unset && !(band_lo_hz >= 0.0 && std::isfinite(band_hi_hz) && band_hi_hz > band_lo_hz))
+    bad = "the band (--band) must be 0 <= LO < HI (Hz), or unset";
   else if (default_modes < 1) bad = "default_modes must be >= 1";
   else if (sensors_per_set < 1) bad = "sensors (--sensors) must be >= 1";
   else if (sets < 1) bad = "sets (--sets) must be >= 1";
@@ -151,7 +152,7 @@ std::vector<int> ChooseSensorGroups(const Eigen::MatrixXd& shapes, const std::ve
 }
 
 TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const std::vector<Reading>& readings,
-                  const std::vector<std::vector<Dof>>& keep) {
+                  const std::vector<std::vector<Dof>>& keep, const std::vector<Dof>& kept_references) {
   if (std::string why; !options.IsValid(&why)) throw UsageError("plan options: " + why);
   const std::string where = input.origin.empty() ? "model" : input.origin;
   const model::Model base = model::ApplyEffects(input);
@@ -185,11 +186,26 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
                                 (options.setup.empty() ? "" : " (setup '" + options.setup + "')") +
                                 "; expected a band holding at least one mode (the model's modes: " + found + (modes.modes.size() > 8 ? ", ..." : "") + " Hz)");
   }
-  plan.candidates = modes.dofs;
-  const auto c = static_cast<Eigen::Index>(modes.dofs.size());
+  // Candidates: the test DOFs that move in some mode of the model (a model without, say, lateral
+  // DOFs gives zero rows there: nothing a sensor could see).
+  std::vector<Eigen::Index> rows_kept;
+  {
+    double largest = 0.0;
+    for (const Mode& mode : modes.modes) largest = std::max(largest, mode.shape.cwiseAbs().maxCoeff());
+    for (Eigen::Index r = 0; r < static_cast<Eigen::Index>(modes.dofs.size()); ++r) {
+      double row = 0.0;
+      for (const Mode& mode : modes.modes) row = std::max(row, std::abs(mode.shape(r)));
+      if (row > 1e-9 * largest) rows_kept.push_back(r);
+    }
+  }
+  plan.candidates.clear();
+  for (Eigen::Index r : rows_kept) plan.candidates.push_back(modes.dofs[static_cast<size_t>(r)]);
+  const auto c = static_cast<Eigen::Index>(rows_kept.size());
   const auto m = static_cast<Eigen::Index>(target.size());
   Eigen::MatrixXd shapes(c, m);
-  for (Eigen::Index j = 0; j < m; ++j) shapes.col(j) = modes.modes[target[j]].shape.real();
+  for (Eigen::Index j = 0; j < m; ++j)
+    for (Eigen::Index r = 0; r < c; ++r) shapes(r, j) = modes.modes[target[j]].shape(rows_kept[static_cast<size_t>(r)]).real();
+  const std::vector<Dof>& candidates = plan.candidates;
 
   // Candidate groups: a point's X, Y, Z together with triaxial sensors, else each DOF.
   std::vector<std::vector<int>> groups;
@@ -197,14 +213,15 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
   if (options.triaxial) {
     std::map<int, int> group_of_node;
     for (Eigen::Index r = 0; r < c; ++r) {
-      const int node = modes.dofs[r].node;
+      const int node = candidates[static_cast<size_t>(r)].node;
       auto [it, fresh] = group_of_node.emplace(node, static_cast<int>(groups.size()));
       if (fresh) groups.emplace_back();
       groups[it->second].push_back(static_cast<int>(r));
-      group_of_dof[modes.dofs[r]] = it->second;
+      group_of_dof[candidates[static_cast<size_t>(r)]] = it->second;
     }
   } else {
-    for (Eigen::Index r = 0; r < c; ++r) group_of_dof[modes.dofs[r]] = static_cast<int>(groups.size()), groups.push_back({static_cast<int>(r)});
+    for (Eigen::Index r = 0; r < c; ++r)
+      group_of_dof[candidates[static_cast<size_t>(r)]] = static_cast<int>(groups.size()), groups.push_back({static_cast<int>(r)});
   }
   std::vector<int> fixed;
   for (const auto& set : keep)
@@ -253,8 +270,9 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
     }
   }
 
-  // References: the candidate DOF whose smallest normalised participation over the target modes
-  // is largest, then each next one raising the smallest of the best participations most.
+  // References: those of a kept plan as they were; else the candidate DOF whose smallest
+  // normalised participation over the target modes is largest, then each next one raising the
+  // smallest of the best participations most.
   Eigen::MatrixXd participation(c, m);
   for (Eigen::Index j = 0; j < m; ++j) {
     const double peak = shapes.col(j).cwiseAbs2().maxCoeff();
@@ -262,7 +280,15 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
   }
   Eigen::VectorXd covered = Eigen::VectorXd::Zero(m);
   std::vector<Eigen::Index> picked;
-  for (int k = 0; k < options.references && static_cast<Eigen::Index>(picked.size()) < c; ++k) {
+  for (const Dof& d : kept_references) {
+    const auto it = std::find(candidates.begin(), candidates.end(), Dof{d.node, std::abs(d.direction)});
+    if (it == candidates.end())
+      throw InputError(where, "the kept plan's reference " + DofName(d) + " is not a test point DOF of the model");
+    const auto r = static_cast<Eigen::Index>(it - candidates.begin());
+    picked.push_back(r);
+    covered = covered.cwiseMax(participation.row(r).transpose());
+  }
+  for (int k = 0; kept_references.empty() && k < options.references && static_cast<Eigen::Index>(picked.size()) < c; ++k) {
     Eigen::Index best = -1;
     double best_min = -1.0, best_sum = -1.0;
     for (Eigen::Index r = 0; r < c; ++r) {
@@ -274,7 +300,9 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
     picked.push_back(best);
     covered = covered.cwiseMax(participation.row(best).transpose());
   }
-  for (Eigen::Index r : picked) plan.references.push_back(modes.dofs[static_cast<size_t>(r)]);
+  if (!kept_references.empty()) plan.references = kept_references;
+  else
+    for (Eigen::Index r : picked) plan.references.push_back(candidates[static_cast<size_t>(r)]);
   // A mode the references do not excite is not measured: it separates no readings either.
   const auto excited = [&](Eigen::Index j) { return covered(j) >= options.min_reference_participation; };
 
@@ -304,8 +332,10 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
                        "the reading '" + reading.label + "' changes the test DOFs of the model " + where + "; expected a diagnosis of this model");
     const auto count = static_cast<Eigen::Index>(s.modes.modes.size());
     Predicted p{Eigen::VectorXd(count), Eigen::MatrixXd(c, count)};
-    for (Eigen::Index k = 0; k < count; ++k)
-      p.hz(k) = s.modes.modes[static_cast<size_t>(k)].frequency_hz, p.shapes.col(k) = s.modes.modes[static_cast<size_t>(k)].shape.real();
+    for (Eigen::Index k = 0; k < count; ++k) {
+      p.hz(k) = s.modes.modes[static_cast<size_t>(k)].frequency_hz;
+      for (Eigen::Index r = 0; r < c; ++r) p.shapes(r, k) = s.modes.modes[static_cast<size_t>(k)].shape(rows_kept[static_cast<size_t>(r)]).real();
+    }
     predicted.push_back(std::move(p));
   }
   // Reading b's mode that is reading a's k-th: k itself, or a neighbour it crossed (largest MAC).
@@ -473,11 +503,11 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
   std::vector<int> fresh;
   for (int g : chosen)
     if (!is_fixed[g]) fresh.push_back(g);
-  std::sort(fresh.begin(), fresh.end(), [&](int a, int b) { return modes.dofs[groups[a][0]] < modes.dofs[groups[b][0]]; });
+  std::sort(fresh.begin(), fresh.end(), [&](int a, int b) { return candidates[groups[a][0]] < candidates[groups[b][0]]; });
   for (int s = 0; s < options.sets; ++s) {
     std::vector<Dof> set;
     for (int k = s * options.sensors_per_set; k < (s + 1) * options.sensors_per_set && k < static_cast<int>(fresh.size()); ++k)
-      for (int r : groups[fresh[k]]) set.push_back(modes.dofs[r]);
+      for (int r : groups[fresh[k]]) set.push_back(candidates[r]);
     plan.sets.push_back(std::move(set));
   }
   const std::vector<int> rows = RowsOf(groups, chosen);

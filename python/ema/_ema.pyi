@@ -1,8 +1,8 @@
 """Type stubs of ema._ema, the compiled core of the ema package (python/ema_module.cpp).
 
 Results are dicts of numpy arrays, lists and numbers with the names of the CLI's JSON; the TypedDicts
-of ema.types name their keys (the package's fit, read_modes, model_modes, correlate, diagnose and
-quality return them wrapped in ema.Result, a dict subclass). Inputs that take a mode set accept a path,
+of ema.types name their keys (the package's fit, read_modes, model_modes, correlate, diagnose, plan
+and quality return them wrapped in ema.Result, a dict subclass). Inputs that take a mode set accept a path,
 a ModesDict (what fit, read_modes and model_modes return) or a dict in `ema fit --json`'s layout
 (ModesJson).
 """
@@ -25,6 +25,7 @@ from .types import ModesDict as ModesDict
 from .types import ModesJson as ModesJson
 from .types import PartDict as PartDict
 from .types import PathLike as PathLike
+from .types import PlanDict as PlanDict
 from .types import QualityDict as QualityDict
 from .types import ShapeValueJson as ShapeValueJson
 
@@ -91,6 +92,25 @@ def diagnose(
 ) -> DiagnosisDict:
     """Which physical effect is the model missing, where, and how sure? As `ema diagnose`; returns
     DIAG.json's layout ('candidates' ranked, rank 1 first)."""
+
+def plan(
+    model: Model,
+    *,
+    setup: str = "",
+    band: Tuple[float, float] | None = None,
+    sensors: int = 4,
+    sets: int = 1,
+    triaxial: bool = False,
+    references: int = 1,
+    sensor_mass: float = 0.0,
+    impacts: int = 5,
+    candidates: Union[Path, DiagnosisDict, Mapping[str, Any], None] = None,
+    keep: Path | None = None,
+    output: Path | None = None,
+) -> PlanDict:
+    """The test to run next, as `ema plan`: sensors, references and acquisition settings for the band's
+    modes, and with candidates (a DIAG.json path or what diagnose returns) the sensors that tell its
+    look-alike readings apart; returns PLAN.json's layout plus 'plan_toml', the plan file's text."""
 
 def quality(
     frfs: Union[Path, FrfDict, Sequence[Union[Path, FrfDict]]],

@@ -416,6 +416,57 @@ class DiagnosisDict(_DiagnosisRequired, total=False):
     modes: List[DiagnosisModeRowDict]  # every test mode before and after rank 1, when there is a candidate
 
 
+# --- plan ------------------------------------------------------------------------------------------
+
+
+class PlanSetDict(TypedDict):
+    name: str  # 'set 1', 'set 2', ... as the plan file names them
+    sensors: List[str]  # DOFs '101+X', ...
+
+
+class PlannedModeDict(TypedDict):
+    frequency_hz: Optional[float]
+    observability: Optional[float]  # RMS at the sensors over RMS at every candidate DOF: 1 = as an average sensor
+    damping_ratio: Optional[float]
+    reference_participation: Optional[float]  # the best reference's squared amplitude over the mode's largest (0..1)
+    excited: bool
+
+
+class PlanAcquisitionDict(TypedDict):
+    sample_rate_hz: Optional[float]
+    samples: int
+    record_length_s: Optional[float]
+    pulse_duration_s: Optional[float]  # half-sine contact time of the hammer tip
+    impacts: int
+    sensor_mass_kg: Optional[float]
+
+
+class SeparationDict(TypedDict):
+    a: str  # 'kind on target' of a reading
+    b: str
+    sigma_before: Optional[float]  # in units of the expected noise: the kept plan's sensors, else the plan for the modes
+    sigma_after: Optional[float]  # with the plan made
+
+
+class _PlanRequired(TypedDict):
+    sensors: List[str]  # every set's DOFs, in order: '101+X', ...
+    references: List[str]  # hammer DOFs
+    sets: List[PlanSetDict]
+    modes: List[PlannedModeDict]  # the target modes, by frequency
+    automac_max_offdiagonal: Optional[float]
+    automac: List[List[Optional[float]]]  # (modes, modes) over every planned sensor DOF
+    band_hz: List[Optional[float]]  # [lo, hi]
+    acquisition: PlanAcquisitionDict
+    notes: List[str]  # what the plan could not satisfy
+    plan_toml: str  # the plan file's text (what ema.plan(..., output=...) writes)
+
+
+class PlanDict(_PlanRequired, total=False):
+    """What plan returns: PLAN.json (`ema plan --json`) plus the plan file's text."""
+
+    separations: List[SeparationDict]  # with candidates only: per pair of look-alike readings
+
+
 # --- quality ---------------------------------------------------------------------------------------
 
 

@@ -124,6 +124,10 @@ TEST(PlanCli, CandidatesSeparateMirrorReadingsAndKeepExtendsAPlan) {
     EXPECT_EQ(std::count(first.sets[0].sensors.begin(), first.sets[0].sensors.end(), d), 0) << DofName(d);
   EXPECT_EQ(second.hammer.references, first.hammer.references);
   const auto plan2 = nlohmann::json::parse(Slurp(dir / "plan2.json"));
+  // PLAN.json says what the file holds: the kept references and settings, not new ones.
+  EXPECT_EQ(plan2["references"], plan["references"]);
+  EXPECT_EQ(plan2["acquisition"]["sample_rate_hz"], plan["acquisition"]["sample_rate_hz"]);
+  EXPECT_EQ(plan2["acquisition"]["samples"], plan["acquisition"]["samples"]);
   // Before = the kept plan's sensors (the first plan's after), after = with the new set.
   EXPECT_NEAR(plan2["separations"][0]["sigma_before"].get<double>(), s["sigma_after"].get<double>(), 1e-6);
   EXPECT_GT(plan2["separations"][0]["sigma_after"].get<double>(), s["sigma_after"].get<double>());  // more sensors, more to see

@@ -161,6 +161,9 @@ TEST(PlanTest, BadInputNamesTheModelAndWhatWasExpected) {
   }
   o.sensors_per_set = 0;
   EXPECT_THROW(PlanTest(m, o), UsageError);
+  o = GuidewayOptions();
+  o.band_lo_hz = 5.0, o.band_hi_hz = 0.0;  // not "unset": a band the wrong way round
+  EXPECT_THROW(PlanTest(m, o), UsageError);
 }
 
 // Two look-alike readings on a symmetric bridge: a mass at a point of one girder or at its mirror

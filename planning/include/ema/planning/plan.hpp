@@ -18,7 +18,7 @@ namespace ema::planning {
 
 struct PlanOptions {
   std::string setup;  ///< the model setup the test is made in ("" = nominal)
-  /// The band whose modes the test must see, Hz. Unset (lo >= hi): 0 to 1.25 × the frequency of
+  /// The band whose modes the test must see, Hz. Unset (both 0): 0 to 1.25 × the frequency of
   /// the `default_modes`-th elastic mode, or of the last one below a gap of more than 3× between
   /// two modes (what lies beyond is another regime, out of a hammer's reach).
   double band_lo_hz = 0.0, band_hi_hz = 0.0;
@@ -103,7 +103,8 @@ std::vector<int> ChooseSensorGroups(const Eigen::MatrixXd& shapes, const std::ve
 /// automac_limit); `keep`: roving sets of an earlier plan that stay (new sets are added).
 /// InputError naming `model.origin` for a band without a model mode, more sensor points than
 /// candidates, or a reading the model cannot take (an effect on a target it does not have).
+/// `references`: the hammer DOFs of that earlier plan, kept instead of chosen anew.
 TestPlan PlanTest(const model::Model& model, const PlanOptions& options, const std::vector<Reading>& readings = {},
-                  const std::vector<std::vector<Dof>>& keep = {});
+                  const std::vector<std::vector<Dof>>& keep = {}, const std::vector<Dof>& references = {});
 
 }  // namespace ema::planning
