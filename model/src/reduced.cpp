@@ -10,11 +10,12 @@
 
 #include "ema/core/error.hpp"
 #include "ema/model/effects.hpp"
+#include "sparse_factor.hpp"
 
 namespace ema::model {
 
 struct ReducedModelFactory::Factorisation {
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  detail::SparseFactor ldlt;
 };
 
 namespace {
@@ -80,8 +81,7 @@ ReducedModelFactory::ReducedModelFactory(const Model& input, const SolveOptions&
   rigid_limit_ = std::max(std::pow(kTwoPi * options_.rigid_frequency_hz, 2), options_.rigid_tolerance * scale);
   factorisation_ = std::make_unique<Factorisation>();
   const Eigen::SparseMatrix<double> shifted = system_.stiffness - sigma * system_.mass;
-  factorisation_->ldlt.compute(shifted);
-  if (factorisation_->ldlt.info() != Eigen::Success)
+  if (!factorisation_->ldlt.Compute(shifted))
     throw InputError(origin, "factorisation of K - sigma M failed (the reduced model of the diagnosis needs it)");
   mass_modes_ = system_.mass * solution_.full_shapes;
   part_rows_.resize(base.fe.parts.size());
@@ -144,7 +144,7 @@ const Eigen::MatrixXd& ReducedModelFactory::Responses(const std::vector<Effect>&
     Eigen::VectorXd unit = Eigen::VectorXd::Zero(DofCount());
     for (size_t k = 0; k < rows.size(); ++k) {
       unit(rows[k]) = 1.0;
-      w.col(static_cast<Eigen::Index>(k)) = factorisation_->ldlt.solve(unit);
+      w.col(static_cast<Eigen::Index>(k)) = factorisation_->ldlt.Solve(unit);
       unit(rows[k]) = 0.0;
     }
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(w);
@@ -158,10 +158,10 @@ const Eigen::MatrixXd& ReducedModelFactory::Responses(const std::vector<Effect>&
   // First and second order: w1 = A⁻¹ (ΔK − λΔM) φ (the mode-shape sensitivity's direction),
   // w2 = A⁻¹ (ΔK − λΔM) w1 (what a large change — a joint 20× softer — adds to it).
   Eigen::MatrixXd w(rhs.rows(), 2 * rhs.cols());
-  for (Eigen::Index j = 0; j < q; ++j) w.col(j) = factorisation_->ldlt.solve(rhs.col(j));
+  for (Eigen::Index j = 0; j < q; ++j) w.col(j) = factorisation_->ldlt.Solve(rhs.col(j));
   Eigen::MatrixXd rhs2 = d.stiffness * w.leftCols(q);
   if (d.mass.nonZeros() > 0) rhs2 -= (d.mass * w.leftCols(q)) * lambda_.head(q).asDiagonal();
-  for (Eigen::Index j = 0; j < q; ++j) w.col(q + j) = factorisation_->ldlt.solve(rhs2.col(j));
+  for (Eigen::Index j = 0; j < q; ++j) w.col(q + j) = factorisation_->ldlt.Solve(rhs2.col(j));
   // Kept as an orthonormal basis of their span (column-pivoted QR, directions below 1e-8 of the
   // largest dropped): a low-rank change has few directions, and each costs memory per DOF.
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(w);

@@ -1,5 +1,6 @@
 // Assembly of M and K at the operating point and the generalised eigenproblem K phi = w^2 M phi.
 #include "ema/model/solve.hpp"
+#include "sparse_factor.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
@@ -297,7 +298,8 @@ System Assemble(const Model& model, const SolveOptions& options, FeAssembly fe_m
 
 namespace {
 
-/// (K - sigma M)^-1 x with a sparse LDL^T factorisation, for Spectra's shift-invert mode.
+/// (K - sigma M)^-1 x with a sparse Cholesky factorisation (sparse_factor.hpp), for Spectra's
+/// shift-invert mode.
 class LdltShiftInvert {
  public:
   using Scalar = double;
@@ -305,20 +307,19 @@ class LdltShiftInvert {
   Eigen::Index rows() const { return k_.rows(); }
   Eigen::Index cols() const { return k_.cols(); }
   void set_shift(double sigma) {
-    Eigen::SparseMatrix<double> a = k_ - sigma * m_;
-    solver_.compute(a);
-    if (solver_.info() != Eigen::Success) throw InputError("", "sparse factorisation of K - sigma M failed");
+    const Eigen::SparseMatrix<double> a = k_ - sigma * m_;
+    if (!solver_.Compute(a)) throw InputError("", "sparse factorisation of K - sigma M failed");
   }
   void perform_op(const double* x_in, double* y_out) const {
     Eigen::Map<const Eigen::VectorXd> x(x_in, k_.rows());
     Eigen::Map<Eigen::VectorXd> y(y_out, k_.rows());
-    y.noalias() = solver_.solve(x);
+    y.noalias() = solver_.Solve(x);
   }
 
  private:
   const Eigen::SparseMatrix<double>& k_;
   const Eigen::SparseMatrix<double>& m_;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver_;
+  detail::SparseFactor solver_;
 };
 
 // Where system DOF i comes from, for messages: its body's line in the model file, or the FE

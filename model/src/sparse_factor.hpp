@@ -1,0 +1,58 @@
+// The sparse Cholesky factorisation of the model's solves: K − σM with σ below the lowest
+// eigenvalue (symmetric positive definite), for the shift-invert eigen-solutions (solve.cpp) and
+// the reduced models of the diagnosis (reduced.cpp). CHOLMOD's supernodal LLᵀ (SuiteSparse, the
+// factorisation FE codes use: dense BLAS kernels on the supernodes of 3-D meshes) when the build
+// found it (EMA_HAVE_CHOLMOD), else Eigen's SimplicialLDLT; a matrix CHOLMOD finds not positive
+// definite (round-off on a nearly singular model) is factorised by the LDLᵀ instead.
+#pragma once
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <memory>
+
+#ifdef EMA_HAVE_CHOLMOD
+#include <Eigen/CholmodSupport>
+#endif
+
+namespace ema::model::detail {
+
+class SparseFactor {
+ public:
+  /// Factorises `a` (symmetric, full storage); false when neither factorisation succeeds.
+  bool Compute(const Eigen::SparseMatrix<double>& a) {
+#ifdef EMA_HAVE_CHOLMOD
+    cholmod_ = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>>();
+    cholmod_->compute(a);
+    if (cholmod_->info() == Eigen::Success) return ldlt_.reset(), true;
+    cholmod_.reset();
+#endif
+    ldlt_ = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>(a);
+    return ldlt_->info() == Eigen::Success;
+  }
+
+  /// A⁻¹ b for a vector or a dense block of columns.
+  template <class Rhs>
+  Eigen::Matrix<double, Eigen::Dynamic, Rhs::ColsAtCompileTime> Solve(const Eigen::MatrixBase<Rhs>& b) const {
+#ifdef EMA_HAVE_CHOLMOD
+    if (cholmod_) return cholmod_->solve(b);
+#endif
+    return ldlt_->solve(b);
+  }
+
+  /// Which factorisation holds the matrix (for benchmarks and tests).
+  bool Supernodal() const {
+#ifdef EMA_HAVE_CHOLMOD
+    return cholmod_ != nullptr;
+#else
+    return false;
+#endif
+  }
+
+ private:
+#ifdef EMA_HAVE_CHOLMOD
+  std::unique_ptr<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>> cholmod_;
+#endif
+  std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> ldlt_;
+};
+
+}  // namespace ema::model::detail
