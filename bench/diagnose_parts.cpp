@@ -47,7 +47,7 @@ ModeSet VerticalModes(const model::Model& truth, int count, double noise, unsign
   return out;
 }
 
-void RunFrame(benchmark::State& state, int segments, int zones) {
+void RunFrame(benchmark::State& state, int segments, int zones, bool model_error = true, int polish_swaps = 3) {
   testing::FrameSpec spec;
   spec.segments = segments;
   spec.zones = zones;
@@ -58,7 +58,10 @@ void RunFrame(benchmark::State& state, int segments, int zones) {
       model::ApplyEffect(nominal, {"stiffness_scale", "girders/G3", {{"factor", 0.4}}, std::nullopt, 0});
   const ModeSet test = VerticalModes(truth, 6, 1e-3, 7);
   diagnose::Diagnosis d;
-  for (auto _ : state) d = diagnose::Diagnose(nominal, {{"", test}});
+  diagnose::DiagnoseOptions options;
+  options.model_error = model_error;
+  options.polish_swaps = polish_swaps;
+  for (auto _ : state) d = diagnose::Diagnose(nominal, {{"", test}}, options);
   const diagnose::Candidate& first = d.candidates.front();
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
@@ -128,6 +131,13 @@ BENCHMARK(BM_DiagnoseFootbridge1000Dofs17PartsNoNodes)->Unit(benchmark::kMillise
 // 12 012 DOFs, 50 parts (a step between the two).
 void BM_DiagnoseFrame12000Dofs50Parts(benchmark::State& state) { RunFrame(state, 1000, 30); }
 BENCHMARK(BM_DiagnoseFrame12000Dofs50Parts)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// The same with the model's form taken as exact (--exact-form): what the model error costs.
+void BM_DiagnoseFrame12000Dofs50PartsExactForm(benchmark::State& state) { RunFrame(state, 1000, 30, false); }
+BENCHMARK(BM_DiagnoseFrame12000Dofs50PartsExactForm)->Unit(benchmark::kMillisecond)->Iterations(1);
+// ... and without the polished swaps of look-alikes (DiagnoseOptions::polish_swaps = 0).
+void BM_DiagnoseFrame12000Dofs50PartsExactFormNoSwaps(benchmark::State& state) { RunFrame(state, 1000, 30, false, 0); }
+BENCHMARK(BM_DiagnoseFrame12000Dofs50PartsExactFormNoSwaps)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // 50 004 DOFs, 50 parts (zones 30: G1..G30, X1..X15, B1..B4, deck).
 void BM_DiagnoseFrame50000Dofs50Parts(benchmark::State& state) { RunFrame(state, 4166, 30); }
