@@ -9,6 +9,7 @@
 
 #include "amplitude_levels.hpp"
 #include "ema/formats/json_codecs.hpp"
+#include "ema/formats/plan_json.hpp"
 #include "json_fuzz_gen.hpp"
 #include "quality_json.hpp"
 
@@ -215,7 +216,7 @@ void Check(const json& j) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace ema;
   Gen g(data, size);
-  switch (g.Int(0, 12)) {
+  switch (g.Int(0, 13)) {
     case 0: {
       frf::FrfResult r;
       auto& s = r.summary;
@@ -431,6 +432,34 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       o.coherence_max_low_fraction = g.Double();
       o.scatter_max = g.Double();
       Check(QualityJson(q, modes, o));
+      break;
+    }
+    case 12: {  // PLAN.json (`ema plan --json`)
+      planning::TestPlan p;
+      p.candidates = g.Dofs(60);
+      p.sets.resize(g.Count(8));
+      for (auto& set : p.sets) set = g.Dofs(30);
+      p.references = g.Dofs(4);
+      p.modes.resize(g.Count(20));
+      for (auto& m : p.modes) {
+        m.frequency_hz = g.Double();
+        m.damping_ratio = g.Double();
+        m.observability = g.Double();
+        m.reference_participation = g.Double();
+        m.excited = g.Bool();
+      }
+      const auto n = static_cast<Eigen::Index>(g.Count(20));
+      p.automac.resize(n, n);
+      for (Eigen::Index k = 0; k < p.automac.size(); ++k) p.automac.data()[k] = g.Double();
+      p.automac_max_offdiagonal = g.Double();
+      p.band_lo_hz = g.Double(), p.band_hi_hz = g.Double(), p.sample_rate_hz = g.Double();
+      p.samples = g.AnyInt();
+      p.pulse_duration_s = g.Double(), p.sensor_mass_kg = g.Double();
+      p.impacts = g.AnyInt();
+      p.separations.resize(g.Count(45));
+      for (auto& s : p.separations) s = {g.Text(), g.Text(), g.Double(), g.Double()};
+      p.notes = g.Texts(5);
+      Check(formats::TestPlanJson(p, g.Bool()));
       break;
     }
     default: {
