@@ -39,6 +39,7 @@
 #include "ema/diagnose/diagnose.hpp"
 #include "ema/formats/diagnosis_readings.hpp"
 #include "ema/formats/io.hpp"
+#include "ema/formats/atomic_file.hpp"
 #include "ema/formats/json_codecs.hpp"
 #include "ema/formats/model_file.hpp"
 #include "ema/formats/plan_file.hpp"
@@ -858,6 +859,47 @@ PYBIND11_MODULE(_ema, m) {
         py::arg("path"),
         "Reads mode shapes (UFF 55, FE modes as UFF 2414, or MODES.json in `ema fit --json`'s layout) with\n"
         "their geometry (15/2411) as a modes dict.");
+
+  // The writers of the CLI's files: what `ema fit -o` / `--json` and `ema frf -o` write, from the
+  // dicts the readers and ema.fit return (issue 41). An output naming the input is refused.
+  auto output_path = [](const py::object& path, const py::object& input, const std::string& what) {
+    if (!IsPath(path)) throw py::type_error("path: expected the path of the " + what + " to write, found " + TypeName(path));
+    const std::string out = PathOf(path);
+    if (IsPath(input)) {
+      try {
+        ema::cli::RefuseOutputsOverInputs({{"input", PathOf(input)}}, {{"path", out}});
+      } catch (const ema::UsageError& e) {
+        throw ema::UsageError(std::string("path: ") + e.what());
+      }
+    }
+    return out;
+  };
+  m.def(
+      "write_modes",
+      [output_path](const py::object& modes, const py::object& path, bool binary) {
+        const std::string out = output_path(path, modes, "modes file");
+        const ModeSet set = ToModeSet(modes, "modes");
+        if (std::filesystem::path(out).extension() == ".json")
+          ema::formats::WriteTextFileAtomically(out, ema::formats::ModeSetJson(set).dump(2) + "\n");
+        else
+          ema::formats::WriteModeSet(out, set, {binary});
+      },
+      py::arg("modes"), py::arg("path"), py::kw_only(), py::arg("binary") = false,
+      "Writes modes (a path, a modes dict, or what ema.fit returns) as UFF 55 with their geometry, or as\n"
+      "JSON in `ema fit --json`'s mode layout when `path` ends in .json; read back by ema.read_modes.\n"
+      "Written atomically; `path` naming the input is refused.");
+  m.def(
+      "write_frfs",
+      [output_path](const py::object& frfs, const py::object& path, bool binary) {
+        const std::string out = output_path(path, frfs, "FRF file");
+        if (!IsPath(frfs) && !IsMapping(frfs))
+          throw py::type_error("frfs: expected a path or an FRF dict (ema.read_frfs), found " + TypeName(frfs));
+        ema::formats::WriteFrfSet(out, ToFrfSet(frfs), {binary});
+      },
+      py::arg("frfs"), py::arg("path"), py::kw_only(), py::arg("binary") = false,
+      "Writes FRFs (a path or an FRF dict as ema.read_frfs returns) as UFF 58 (58b with binary=True),\n"
+      "as `ema frf -o` writes them; read back by ema.read_frfs. Written atomically; `path` naming the\n"
+      "input is refused.");
 
   m.def(
       "estimate_frfs",

@@ -24,6 +24,8 @@ from ._ema import (
     mode_indicators,
     read_frfs,
     synthesize,
+    write_frfs,
+    write_modes,
 )
 from .plot import plot_frf, plot_mac, plot_stabilisation
 from .results import Result, returning_result, to_dataframe, to_json, to_jsonable
@@ -56,6 +58,8 @@ __all__ = [
     "read_frfs",
     "read_modes",
     "synthesize",
+    "write_frfs",
+    "write_modes",
     # pure Python (results.py, plot.py)
     "Result",
     "to_dataframe",

@@ -45,6 +45,12 @@ def read_frfs(path: Path) -> FrfDict:
 def read_modes(path: Path) -> ModesDict:
     """Reads mode shapes (UFF 55, FE modes as UFF 2414, or MODES.json) with their geometry as a modes dict."""
 
+def write_modes(modes: Union[Path, Mapping[str, Any]], path: Path, *, binary: bool = False) -> None:
+    """Modes as UFF 55 (or JSON when path ends in .json), read back by read_modes."""
+
+def write_frfs(frfs: Union[Path, Mapping[str, Any]], path: Path, *, binary: bool = False) -> None:
+    """FRFs as UFF 58 (58b with binary=True), read back by read_frfs."""
+
 def estimate_frfs(paths: Sequence[str], estimator: str = "H1") -> FrfDict:
     """Hammer time data (UFF 58 type 1, CSV or MATLAB .mat; one file per roving set) to FRFs, as `ema frf`."""
 

@@ -299,3 +299,33 @@ def test_ctrl_c_interrupts_a_diagnosis():
     interrupted = time.monotonic() - start
     timer.join()
     assert interrupted < 0.6 * whole, (whole, interrupted)
+
+
+def test_write_modes_and_frfs_round_trip_through_the_readers(tmp_path):
+    # issue 41: the fit's modes and the FRFs written as the CLI writes them, read back by the
+    # readers: UFF 55 and MODES.json give the same frequencies and shapes (to the UFF fields' 1e-6
+    # relative precision), UFF 58 and 58b the same FRFs.
+    frfs = _two_mode_frfs()
+    fit = ema.fit(frfs, band=(10.0, 190.0))
+    for name in ("modes.unv", "modes.json"):
+        ema.write_modes(fit, tmp_path / name)
+        back = ema.read_modes(tmp_path / name)
+        np.testing.assert_allclose(back["frequency_hz"], fit["frequency_hz"], rtol=1e-6)
+        np.testing.assert_allclose(np.abs(back["shapes"]), np.abs(fit["shapes"]), rtol=1e-5, atol=1e-9)
+    for binary in (False, True):
+        path = tmp_path / f"frf-{binary}.unv"
+        ema.write_frfs(frfs, path, binary=binary)
+        back = ema.read_frfs(path)
+        np.testing.assert_allclose(back["frequency_hz"], frfs["frequency_hz"], rtol=1e-6)
+        np.testing.assert_allclose(back["h"], frfs["h"], rtol=1e-5, atol=1e-9 * np.abs(frfs["h"]).max())
+        assert [tuple(d) for d in back["outputs"]] == [(1, "+Z"), (2, "+Z")]
+    # An output over the input is refused and leaves the input as it was; a bad path is a TypeError.
+    before = (tmp_path / "modes.unv").read_bytes()
+    with pytest.raises(ValueError, match="path"):
+        ema.write_modes(tmp_path / "modes.unv", tmp_path / "modes.unv")
+    assert (tmp_path / "modes.unv").read_bytes() == before
+    with pytest.raises(TypeError, match="path"):
+        ema.write_frfs(frfs, 42)
+    with pytest.raises(TypeError, match="frfs"):
+        ema.write_frfs([1, 2], tmp_path / "x.unv")
+    assert not (tmp_path / "x.unv").exists()
