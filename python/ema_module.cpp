@@ -903,20 +903,84 @@ PYBIND11_MODULE(_ema, m) {
 
   m.def(
       "estimate_frfs",
-      [](const std::vector<std::string>& paths, const std::string& estimator) {
-        std::vector<ema::acquisition::RecordSet> sets;
-        for (const auto& p : paths) sets.push_back({p, ema::formats::ReadTimeRecords(p)});
+      [](const py::object& paths, const std::string& estimator, const py::object& band, const py::object& exp_window,
+         double exp_end_level, const std::string& quantity, double trigger_level, double force_window,
+         double double_hit_ratio, double double_hit_autocorrelation, bool accept_double_hits, double overload_fraction,
+         double level_tolerance) {
+        // One path or a sequence of paths (str or os.PathLike), one per roving set.
+        std::vector<std::string> files;
+        if (IsPath(paths)) {
+          files.push_back(PathOf(paths));
+        } else if (py::isinstance<py::sequence>(paths) && !py::isinstance<py::bytes>(paths)) {
+          for (const py::handle& p : py::reinterpret_borrow<py::sequence>(paths)) {
+            if (!IsPath(p)) throw py::type_error("paths: expected paths of time data, found " + TypeName(p) + " in the list");
+            files.push_back(PathOf(p));
+          }
+        } else {
+          throw py::type_error("paths: expected a path or a list of paths of time data, found " + TypeName(paths));
+        }
+        if (files.empty()) throw py::value_error("paths: expected at least one time-data file");
+        // The options of `ema frf`, by the same names (app/cmd_frf.cpp).
         ema::frf::FrfOptions opt;
-        opt.estimator = ema::frf::ParseEstimator(estimator);
-        py::gil_scoped_release release;
-        const auto result = ema::frf::EstimateFrfs(ema::acquisition::AssembleHammerMeasurement(std::move(sets)), opt);
-        py::gil_scoped_acquire acquire;
-        return FrfDict(result.frfs);
+        try {
+          opt.estimator = ema::frf::ParseEstimator(estimator);
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(std::string("estimator: ") + e.what());
+        }
+        if (!band.is_none()) {
+          std::tie(opt.band_lo_hz, opt.band_hi_hz) = Band(band);
+        }
+        ema::acquisition::ImpactOptions& imp = opt.impact;
+        if (py::isinstance<py::str>(exp_window)) {
+          if (!ema::FromName(ema::frf::kExpWindowNames, exp_window.cast<std::string>(), &imp.exp_window))
+            throw py::value_error("exp_window: expected 'auto', 'none' or a decay rate 1/tau in 1/s, got '" +
+                                  exp_window.cast<std::string>() + "'");
+        } else if (py::isinstance<py::float_>(exp_window) || py::isinstance<py::int_>(exp_window)) {
+          imp.exp_window = ema::acquisition::ExpWindowMode::kFixed;
+          imp.exp_decay_rate = exp_window.cast<double>();
+        } else {
+          throw py::type_error("exp_window: expected 'auto', 'none' or a number, found " + TypeName(exp_window));
+        }
+        imp.exp_end_level = exp_end_level;
+        imp.trigger_level = trigger_level;
+        imp.force_window_pulses = force_window;
+        imp.double_hit_high = double_hit_ratio;
+        imp.double_hit_low = std::min(imp.double_hit_low, 0.5 * imp.double_hit_high);
+        imp.double_hit_autocorrelation = double_hit_autocorrelation;
+        imp.reject_double_hits = !accept_double_hits;
+        imp.overload_fraction = overload_fraction;
+        imp.level_tolerance = level_tolerance;
+        if (!quantity.empty() && !ema::FromName(ema::frf::kOutputQuantityNames, quantity, &opt.output_quantity))
+          throw py::value_error("quantity: expected " + ema::NameList(ema::frf::kOutputQuantityNames) + ", got '" + quantity + "'");
+        if (std::string why; !opt.IsValid(&why)) throw py::value_error(why);
+        std::vector<ema::acquisition::RecordSet> sets;
+        for (const auto& p : files) sets.push_back({p, ema::formats::ReadTimeRecords(p)});
+        ema::frf::FrfResult result;
+        {
+          py::gil_scoped_release release;
+          result = ema::frf::EstimateFrfs(ema::acquisition::AssembleHammerMeasurement(std::move(sets)), opt);
+        }
+        py::dict d = FrfDict(result.frfs);
+        // What `ema frf --json` writes: per FRF its averages and rejections, and every rejected
+        // impact with its file and reason.
+        d["summary"] = FromJson(ema::formats::FrfSummaryJson(result));
+        return d;
       },
-      py::arg("paths"), py::arg("estimator") = "H1",
-      "Hammer time data (UFF 58 type 1, CSV or MATLAB .mat; one file per roving set) to FRFs, as `ema frf`\n"
-      "with its default options: impact checks, automatic exponential window, H1/H2/Hv. Returns an FRF dict\n"
-      "with coherence and the accepted impacts per FRF ('averages').");
+      py::arg("paths"), py::arg("estimator") = "H1", py::kw_only(), py::arg("band") = py::none(),
+      py::arg("exp_window") = "auto", py::arg("exp_end_level") = ema::acquisition::ImpactOptions{}.exp_end_level,
+      py::arg("quantity") = "", py::arg("trigger_level") = ema::acquisition::ImpactOptions{}.trigger_level,
+      py::arg("force_window") = ema::acquisition::ImpactOptions{}.force_window_pulses,
+      py::arg("double_hit_ratio") = ema::acquisition::ImpactOptions{}.double_hit_high,
+      py::arg("double_hit_autocorrelation") = ema::acquisition::ImpactOptions{}.double_hit_autocorrelation,
+      py::arg("accept_double_hits") = false,
+      py::arg("overload_fraction") = ema::acquisition::ImpactOptions{}.overload_fraction,
+      py::arg("level_tolerance") = ema::acquisition::ImpactOptions{}.level_tolerance,
+      "Hammer time data (UFF 58 type 1, CSV or MATLAB .mat; a path or a list of paths, one per roving set)\n"
+      "to FRFs, as `ema frf` with the same options by the same names (band=(lo, hi), exp_window='auto',\n"
+      "'none' or a decay rate, quantity='accelerance'|'mobility'|'receptance', trigger_level, force_window,\n"
+      "double_hit_ratio, double_hit_autocorrelation, accept_double_hits, overload_fraction, level_tolerance).\n"
+      "Returns an FRF dict with coherence and the accepted impacts per FRF ('averages'), and 'summary': what\n"
+      "`ema frf --json` writes (per FRF its 'rejected' impacts with their file and reason).");
 
   m.def(
       "fit",

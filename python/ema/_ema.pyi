@@ -51,7 +51,22 @@ def write_modes(modes: Union[Path, Mapping[str, Any]], path: Path, *, binary: bo
 def write_frfs(frfs: Union[Path, Mapping[str, Any]], path: Path, *, binary: bool = False) -> None:
     """FRFs as UFF 58 (58b with binary=True), read back by read_frfs."""
 
-def estimate_frfs(paths: Sequence[str], estimator: str = "H1") -> FrfDict:
+def estimate_frfs(
+    paths: Union[Path, Sequence[Path]],
+    estimator: str = "H1",
+    *,
+    band: Tuple[float, float] | None = None,
+    exp_window: Union[str, float] = "auto",
+    exp_end_level: float = ...,
+    quantity: str = "",
+    trigger_level: float = ...,
+    force_window: float = ...,
+    double_hit_ratio: float = ...,
+    double_hit_autocorrelation: float = ...,
+    accept_double_hits: bool = False,
+    overload_fraction: float = ...,
+    level_tolerance: float = ...,
+) -> FrfDict:
     """Hammer time data (UFF 58 type 1, CSV or MATLAB .mat; one file per roving set) to FRFs, as `ema frf`."""
 
 def fit(

@@ -13,7 +13,7 @@ typing.NotRequired).
 from __future__ import annotations
 
 import os
-from typing import Any, List, Literal, Mapping, Optional, Sequence, Tuple, TypedDict, Union
+from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -52,6 +52,7 @@ class FrfDict(_FrfRequired, total=False):
     roving_hammer: bool
     window_decay_rate: float
     output_sets: List[int]  # per output, its roving set (empty when unknown)
+    summary: Dict[str, Any]  # estimate_frfs: what `ema frf --json` writes (per FRF its rejected impacts)
 
 
 class ModeIndicatorsDict(TypedDict):

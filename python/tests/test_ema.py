@@ -329,3 +329,28 @@ def test_write_modes_and_frfs_round_trip_through_the_readers(tmp_path):
     with pytest.raises(TypeError, match="frfs"):
         ema.write_frfs([1, 2], tmp_path / "x.unv")
     assert not (tmp_path / "x.unv").exists()
+
+
+def test_estimate_frfs_takes_the_cli_options_and_returns_the_rejected_impacts(tmp_path):
+    # issue 41: ema frf's options by the same names, a pathlib.Path, and the summary ema frf --json
+    # writes (per FRF the rejected impacts with file and reason) — equal to the CLI's files.
+    data = pathlib.Path(SOURCE) / "samples" / "guideway" / "data" / "stud-5um.unv"
+    run_ema("frf", data, "-o", tmp_path / "frf.unv", "--json", tmp_path / "frf.json", "--exp-window", "none",
+            "--trigger-level", "0.2", "--band", "50:600")
+    written = ema.read_frfs(str(tmp_path / "frf.unv"))
+    py = ema.estimate_frfs(data, exp_window="none", trigger_level=0.2, band=(50.0, 600.0))
+    np.testing.assert_allclose(py["frequency_hz"], written["frequency_hz"], rtol=1e-12, atol=0)
+    assert np.abs(py["h"] - written["h"]).max() <= 1e-12 * np.abs(py["h"]).max()
+    summary = load_json(tmp_path / "frf.json")
+    assert py["summary"] == summary
+    rejected = [r for f in py["summary"]["frfs"] for r in f["rejected"]]
+    assert rejected and all(r["reason"] and r["file"].endswith("stud-5um.unv") for r in rejected)
+    # The sample's double hit (set 2, impact 3): rejected by default, kept when asked.
+    kept = ema.estimate_frfs([data], exp_window="none", trigger_level=0.2, band=(50.0, 600.0), accept_double_hits=True)
+    assert kept["averages"].sum() > py["averages"].sum()
+    with pytest.raises(TypeError, match="paths"):
+        ema.estimate_frfs(42)
+    with pytest.raises(ValueError, match="exp_window"):
+        ema.estimate_frfs(data, exp_window="sometimes")
+    with pytest.raises(ValueError, match="trigger_level"):
+        ema.estimate_frfs(data, trigger_level=1.5)
