@@ -906,10 +906,17 @@ PYBIND11_MODULE(_ema, m) {
       [](const py::object& paths, const std::string& estimator, const py::object& band, const py::object& exp_window,
          double exp_end_level, const std::string& quantity, double trigger_level, double force_window,
          double double_hit_ratio, double double_hit_autocorrelation, bool accept_double_hits, double overload_fraction,
-         double level_tolerance) {
-        // One path or a sequence of paths (str or os.PathLike), one per roving set.
+         double level_tolerance, const py::object& force, const py::object& response, const py::object& fs,
+         const py::object& dofs, const py::object& reference, const std::string& response_quantity) {
+        // One path or a sequence of paths (str or os.PathLike), one per roving set; or the records
+        // as arrays (force=, response=, fs=, dofs=, reference=): one roving set.
         std::vector<std::string> files;
-        if (IsPath(paths)) {
+        const bool arrays = !force.is_none() || !response.is_none();
+        if (arrays) {
+          if (!paths.is_none()) throw py::type_error("paths: give paths or arrays (force=, response=), not both");
+        } else if (paths.is_none()) {
+          throw py::type_error("paths: expected a path or a list of paths of time data, or force= and response= arrays");
+        } else if (IsPath(paths)) {
           files.push_back(PathOf(paths));
         } else if (py::isinstance<py::sequence>(paths) && !py::isinstance<py::bytes>(paths)) {
           for (const py::handle& p : py::reinterpret_borrow<py::sequence>(paths)) {
@@ -919,7 +926,7 @@ PYBIND11_MODULE(_ema, m) {
         } else {
           throw py::type_error("paths: expected a path or a list of paths of time data, found " + TypeName(paths));
         }
-        if (files.empty()) throw py::value_error("paths: expected at least one time-data file");
+        if (!arrays && files.empty()) throw py::value_error("paths: expected at least one time-data file");
         // The options of `ema frf`, by the same names (app/cmd_frf.cpp).
         ema::frf::FrfOptions opt;
         try {
@@ -955,6 +962,63 @@ PYBIND11_MODULE(_ema, m) {
         if (std::string why; !opt.IsValid(&why)) throw py::value_error(why);
         std::vector<ema::acquisition::RecordSet> sets;
         for (const auto& p : files) sets.push_back({p, ema::formats::ReadTimeRecords(p)});
+        if (arrays) {
+          // force: (impacts, samples); response: (impacts, channels, samples), or (channels,
+          // samples) for one impact; the records as a file of them would hold (formats.md).
+          if (force.is_none() || response.is_none() || fs.is_none() || dofs.is_none() || reference.is_none())
+            throw py::type_error("arrays: force=, response=, fs=, dofs= and reference= are all needed");
+          auto f = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(force);
+          auto r = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(response);
+          if (!f || !r || py::isinstance<py::str>(force) || py::isinstance<py::str>(response))
+            throw py::type_error("force, response: expected real numeric arrays");
+          if (f.ndim() == 1) f = f.reshape({py::ssize_t(1), f.shape(0)});
+          if (r.ndim() == 2 && f.shape(0) == 1) r = r.reshape({py::ssize_t(1), r.shape(0), r.shape(1)});
+          if (f.ndim() != 2 || r.ndim() != 3)
+            throw py::value_error("force: expected (impacts, samples); response: (impacts, channels, samples) or (channels, samples)");
+          const auto impacts = f.shape(0), samples = f.shape(1), channels = r.shape(1);
+          if (r.shape(0) != impacts || r.shape(2) != samples || samples < 2)
+            throw py::value_error("response: expected shape (" + std::to_string(impacts) + ", channels, " + std::to_string(samples) +
+                                  ") to match force's (impacts, samples) = (" + std::to_string(impacts) + ", " +
+                                  std::to_string(samples) + "), found " + std::string(py::str(py::tuple(r.attr("shape")))));
+          double rate = 0.0;
+          try {
+            rate = fs.cast<double>();
+          } catch (const py::cast_error&) {
+            throw py::type_error("fs: expected the sample rate in Hz, found " + TypeName(fs));
+          }
+          if (!(rate > 0.0) || !std::isfinite(rate)) throw py::value_error("fs: expected a sample rate > 0 Hz");
+          if (!py::isinstance<py::sequence>(dofs) || py::isinstance<py::str>(dofs) || static_cast<py::ssize_t>(py::len(dofs)) != channels)
+            throw py::value_error("dofs: expected one DOF per response channel (" + std::to_string(channels) + "), e.g. [(101, '+Z'), ...]");
+          std::vector<Dof> channel_dofs;
+          for (const py::handle& d : py::reinterpret_borrow<py::sequence>(dofs)) channel_dofs.push_back(ToDof(d));
+          const Dof hammer = ToDof(reference);
+          ema::Quantity q = ema::Quantity::kUnknown;
+          const std::string unit = response_quantity == "acceleration" ? "m/s^2" : response_quantity == "velocity" ? "m/s" : "m";
+          if (response_quantity == "acceleration") q = ema::Quantity::kAcceleration;
+          else if (response_quantity == "velocity") q = ema::Quantity::kVelocity;
+          else if (response_quantity == "displacement") q = ema::Quantity::kDisplacement;
+          else throw py::value_error("response_quantity: expected 'acceleration', 'velocity' or 'displacement'");
+          ema::acquisition::RecordSet set{"arrays", {}};
+          const auto fv = f.unchecked<2>();
+          const auto rv = r.unchecked<3>();
+          for (py::ssize_t i = 0; i < impacts; ++i) {
+            ema::TimeRecord force_record;
+            force_record.channel = hammer, force_record.reference = hammer, force_record.impact = static_cast<int>(i + 1);
+            force_record.quantity = ema::Quantity::kForce, force_record.sample_interval_s = 1.0 / rate, force_record.unit = "N";
+            force_record.origin = "force[" + std::to_string(i) + "]";
+            for (py::ssize_t k = 0; k < samples; ++k) force_record.samples.push_back(fv(i, k));
+            set.records.push_back(std::move(force_record));
+            for (py::ssize_t c = 0; c < channels; ++c) {
+              ema::TimeRecord rec;
+              rec.channel = channel_dofs[static_cast<size_t>(c)], rec.reference = hammer, rec.impact = static_cast<int>(i + 1);
+              rec.quantity = q, rec.sample_interval_s = 1.0 / rate, rec.unit = unit;
+              rec.origin = "response[" + std::to_string(i) + ", " + std::to_string(c) + "]";
+              for (py::ssize_t k = 0; k < samples; ++k) rec.samples.push_back(rv(i, c, k));
+              set.records.push_back(std::move(rec));
+            }
+          }
+          sets.push_back(std::move(set));
+        }
         ema::frf::FrfResult result;
         {
           py::gil_scoped_release release;
@@ -966,7 +1030,7 @@ PYBIND11_MODULE(_ema, m) {
         d["summary"] = FromJson(ema::formats::FrfSummaryJson(result));
         return d;
       },
-      py::arg("paths"), py::arg("estimator") = "H1", py::kw_only(), py::arg("band") = py::none(),
+      py::arg("paths") = py::none(), py::arg("estimator") = "H1", py::kw_only(), py::arg("band") = py::none(),
       py::arg("exp_window") = "auto", py::arg("exp_end_level") = ema::acquisition::ImpactOptions{}.exp_end_level,
       py::arg("quantity") = "", py::arg("trigger_level") = ema::acquisition::ImpactOptions{}.trigger_level,
       py::arg("force_window") = ema::acquisition::ImpactOptions{}.force_window_pulses,
@@ -974,13 +1038,18 @@ PYBIND11_MODULE(_ema, m) {
       py::arg("double_hit_autocorrelation") = ema::acquisition::ImpactOptions{}.double_hit_autocorrelation,
       py::arg("accept_double_hits") = false,
       py::arg("overload_fraction") = ema::acquisition::ImpactOptions{}.overload_fraction,
-      py::arg("level_tolerance") = ema::acquisition::ImpactOptions{}.level_tolerance,
+      py::arg("level_tolerance") = ema::acquisition::ImpactOptions{}.level_tolerance, py::arg("force") = py::none(),
+      py::arg("response") = py::none(), py::arg("fs") = py::none(), py::arg("dofs") = py::none(),
+      py::arg("reference") = py::none(), py::arg("response_quantity") = "acceleration",
       "Hammer time data (UFF 58 type 1, CSV or MATLAB .mat; a path or a list of paths, one per roving set)\n"
       "to FRFs, as `ema frf` with the same options by the same names (band=(lo, hi), exp_window='auto',\n"
       "'none' or a decay rate, quantity='accelerance'|'mobility'|'receptance', trigger_level, force_window,\n"
       "double_hit_ratio, double_hit_autocorrelation, accept_double_hits, overload_fraction, level_tolerance).\n"
       "Returns an FRF dict with coherence and the accepted impacts per FRF ('averages'), and 'summary': what\n"
-      "`ema frf --json` writes (per FRF its 'rejected' impacts with their file and reason).");
+      "`ema frf --json` writes (per FRF its 'rejected' impacts with their file and reason).\n"
+      "Or the records as numpy arrays, one roving set: force (impacts, samples) in N, response (impacts,\n"
+      "channels, samples), fs in Hz, dofs (one per channel, e.g. (101, '+Z')), reference (the hammer DOF),\n"
+      "response_quantity ('acceleration' in m/s^2, 'velocity', 'displacement').");
 
   m.def(
       "fit",

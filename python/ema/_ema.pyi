@@ -52,7 +52,7 @@ def write_frfs(frfs: Union[Path, Mapping[str, Any]], path: Path, *, binary: bool
     """FRFs as UFF 58 (58b with binary=True), read back by read_frfs."""
 
 def estimate_frfs(
-    paths: Union[Path, Sequence[Path]],
+    paths: Union[Path, Sequence[Path], None] = None,
     estimator: str = "H1",
     *,
     band: Tuple[float, float] | None = None,
@@ -66,6 +66,12 @@ def estimate_frfs(
     accept_double_hits: bool = False,
     overload_fraction: float = ...,
     level_tolerance: float = ...,
+    force: npt.ArrayLike | None = None,
+    response: npt.ArrayLike | None = None,
+    fs: float | None = None,
+    dofs: Sequence[Union[str, Tuple[int, str]]] | None = None,
+    reference: Union[str, Tuple[int, str], None] = None,
+    response_quantity: Literal["acceleration", "velocity", "displacement"] = "acceleration",
 ) -> FrfDict:
     """Hammer time data (UFF 58 type 1, CSV or MATLAB .mat; one file per roving set) to FRFs, as `ema frf`."""
 

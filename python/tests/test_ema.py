@@ -354,3 +354,49 @@ def test_estimate_frfs_takes_the_cli_options_and_returns_the_rejected_impacts(tm
         ema.estimate_frfs(data, exp_window="sometimes")
     with pytest.raises(ValueError, match="trigger_level"):
         ema.estimate_frfs(data, trigger_level=1.5)
+
+
+def test_estimate_frfs_from_arrays_equals_the_same_records_from_a_file(tmp_path):
+    # issue 41: numpy arrays in (force=, response=, fs=, dofs=, reference=) give exactly what the same
+    # records give from a CSV file (docs/formats.md: impact column, shortest round-trip numbers):
+    # a 1-DOF oscillator at 40 Hz hit 4 times by a 2 ms half-sine, two response channels.
+    fs, n, impacts = 1024.0, 2048, 4
+    t = np.arange(n) / fs
+    wn, zeta = 2 * np.pi * 40.0, 0.02
+    wd = wn * np.sqrt(1 - zeta**2)
+    g = np.exp(-zeta * wn * t) * np.sin(wd * t) / wd  # impulse response of x'' + 2ζωx' + ω²x = f (unit mass)
+    rng = np.random.default_rng(41)
+    force = np.zeros((impacts, n))
+    response = np.zeros((impacts, 2, n))
+    for i in range(impacts):
+        pulse = (t >= 0.05) & (t < 0.052)
+        force[i, pulse] = (90 + 5 * i) * np.sin(np.pi * (t[pulse] - 0.05) / 0.002)
+        x = np.convolve(force[i], g)[:n] / fs
+        acc = np.gradient(np.gradient(x, 1 / fs), 1 / fs)
+        response[i, 0] = acc + 1e-4 * rng.standard_normal(n)
+        response[i, 1] = -0.5 * acc + 1e-4 * rng.standard_normal(n)
+    dofs = [(101, "+Z"), (102, "+Z")]
+    arrays = ema.estimate_frfs(force=force, response=response, fs=fs, dofs=dofs, reference=(101, "+Z"))
+    lines = ["impact,time,force:101:+Z[N],acc:101:+Z[m/s^2],acc:102:+Z[m/s^2]"]
+    for i in range(impacts):
+        for k in range(n):
+            lines.append(f"{i + 1},{t[k]!r},{force[i, k]!r},{response[i, 0, k]!r},{response[i, 1, k]!r}")
+    (tmp_path / "hits.csv").write_text("\n".join(lines) + "\n")
+    from_file = ema.estimate_frfs(tmp_path / "hits.csv")
+    np.testing.assert_array_equal(arrays["frequency_hz"], from_file["frequency_hz"])
+    np.testing.assert_array_equal(arrays["h"], from_file["h"])
+    np.testing.assert_array_equal(arrays["averages"], from_file["averages"])
+    # And it is the oscillator: the driving point's peak at 40 Hz, the transfer at -0.5 of it.
+    f = arrays["frequency_hz"]
+    peak = f[np.argmax(np.abs(arrays["h"][0, :, 0]))]
+    assert abs(peak - 40.0) <= f[1] - f[0]
+    k = np.argmin(np.abs(f - 40.0))
+    assert abs(arrays["h"][0, k, 1] / arrays["h"][0, k, 0] + 0.5) < 0.01
+    with pytest.raises(ValueError, match="response: expected shape"):
+        ema.estimate_frfs(force=force, response=response[:, :, :100], fs=fs, dofs=dofs, reference=(101, "+Z"))
+    with pytest.raises(ValueError, match="dofs"):
+        ema.estimate_frfs(force=force, response=response, fs=fs, dofs=dofs[:1], reference=(101, "+Z"))
+    with pytest.raises(TypeError, match="all needed"):
+        ema.estimate_frfs(force=force, response=response, fs=fs, dofs=dofs)
+    with pytest.raises(TypeError, match="not both"):
+        ema.estimate_frfs(tmp_path / "hits.csv", force=force, response=response, fs=fs, dofs=dofs, reference=(101, "+Z"))
