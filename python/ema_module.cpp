@@ -41,6 +41,7 @@
 #include "ema/formats/io.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/json_codecs.hpp"
+#include "ema/formats/uff.hpp"
 #include "ema/formats/model_file.hpp"
 #include "ema/formats/plan_file.hpp"
 #include "ema/formats/plan_json.hpp"
@@ -859,6 +860,131 @@ PYBIND11_MODULE(_ema, m) {
         py::arg("path"),
         "Reads mode shapes (UFF 55, FE modes as UFF 2414, or MODES.json in `ema fit --json`'s layout) with\n"
         "their geometry (15/2411) as a modes dict.");
+
+  // Every dataset of a UFF file, as the library reads it (issue 41): the geometry, units, trace
+  // lines, mode shapes, functions (time records, FRFs, PSDs, coherences ...) that the typed readers
+  // above turn into FRF and mode dicts, here each as its own dict.
+  m.def(
+      "read_uff",
+      [](const py::object& path) {
+        if (!IsPath(path)) throw py::type_error("path: expected the path of a UFF file, found " + TypeName(path));
+        namespace uff = ema::formats::uff;
+        const std::vector<uff::Dataset> datasets = uff::ReadFile(PathOf(path));
+        py::list out;
+        auto strings = [](const auto& a) {
+          py::list l;
+          for (const auto& x : a) l.append(ema::formats::JsonText(x));
+          return l;
+        };
+        auto nodes = [](const std::vector<uff::NodeRecord>& records) {
+          py::array_t<std::int64_t> label(static_cast<py::ssize_t>(records.size()));
+          py::array_t<double> xyz({static_cast<py::ssize_t>(records.size()), py::ssize_t(3)});
+          py::array_t<int> cs({static_cast<py::ssize_t>(records.size()), py::ssize_t(2)});
+          auto l = label.mutable_unchecked<1>();
+          auto x = xyz.mutable_unchecked<2>();
+          auto c = cs.mutable_unchecked<2>();
+          for (size_t i = 0; i < records.size(); ++i) {
+            const auto k = static_cast<py::ssize_t>(i);
+            l(k) = records[i].label;
+            for (int d = 0; d < 3; ++d) x(k, d) = records[i].xyz[static_cast<size_t>(d)];
+            c(k, 0) = records[i].definition_cs, c(k, 1) = records[i].displacement_cs;
+          }
+          py::dict d;
+          d["label"] = label, d["xyz"] = xyz, d["coordinate_systems"] = cs;
+          return d;
+        };
+        for (const uff::Dataset& ds : datasets) {
+          py::dict d;
+          d["number"] = ds.number;
+          d["line"] = ds.line;
+          d["notes"] = strings(ds.notes);
+          std::visit(
+              [&](const auto& b) {
+                using T = std::decay_t<decltype(b)>;
+                if constexpr (std::is_same_v<T, uff::Header151>) {
+                  d["model_name"] = ema::formats::JsonText(b.model_name), d["description"] = ema::formats::JsonText(b.description);
+                  d["db_program"] = ema::formats::JsonText(b.db_program), d["uff_program"] = ema::formats::JsonText(b.uff_program);
+                } else if constexpr (std::is_same_v<T, uff::Units164>) {
+                  d["code"] = b.code, d["description"] = ema::formats::JsonText(b.description);
+                  d["length"] = b.length, d["force"] = b.force, d["temperature"] = b.temperature;
+                  d["temperature_offset"] = b.temperature_offset, d["temperature_mode"] = b.temperature_mode;
+                } else if constexpr (std::is_same_v<T, uff::Nodes15> || std::is_same_v<T, uff::Nodes2411>) {
+                  d["nodes"] = nodes(b.nodes);
+                } else if constexpr (std::is_same_v<T, uff::CoordinateSystems18>) {
+                  py::list l;
+                  for (const auto& c : b.systems)
+                    l.append(py::dict(py::arg("number") = c.number, py::arg("type") = c.type, py::arg("reference") = c.reference,
+                                      py::arg("name") = ema::formats::JsonText(c.name),
+                                      py::arg("points") = std::vector<double>(c.points.begin(), c.points.end())));
+                  d["systems"] = l;
+                } else if constexpr (std::is_same_v<T, uff::CoordinateSystems2420>) {
+                  py::list l;
+                  for (const auto& c : b.systems)
+                    l.append(py::dict(py::arg("label") = c.label, py::arg("type") = c.type, py::arg("name") = ema::formats::JsonText(c.name),
+                                      py::arg("matrix") = std::vector<double>(c.matrix.begin(), c.matrix.end())));
+                  d["part_name"] = ema::formats::JsonText(b.part_name), d["systems"] = l;
+                } else if constexpr (std::is_same_v<T, uff::TraceLine82>) {
+                  d["trace_number"] = b.number, d["id"] = ema::formats::JsonText(b.id), d["nodes"] = b.nodes;
+                } else if constexpr (std::is_same_v<T, uff::Data55>) {
+                  d["id"] = strings(b.id);
+                  d["analysis_type"] = b.analysis_type, d["data_characteristic"] = b.data_characteristic;
+                  d["specific_data_type"] = b.specific_data_type, d["values_per_node"] = b.ndv;
+                  d["integers"] = b.integers, d["reals"] = b.reals;
+                  std::vector<std::int64_t> node_ids;
+                  py::array_t<std::complex<double>> values({static_cast<py::ssize_t>(b.nodes.size()), static_cast<py::ssize_t>(b.ndv)});
+                  auto v = values.mutable_unchecked<2>();
+                  for (size_t i = 0; i < b.nodes.size(); ++i) {
+                    node_ids.push_back(b.nodes[i].node);
+                    for (int k = 0; k < b.ndv; ++k) {
+                      const auto& x = b.nodes[i].values;
+                      const size_t re = b.IsComplex() ? 2 * static_cast<size_t>(k) : static_cast<size_t>(k);
+                      v(static_cast<py::ssize_t>(i), k) = {re < x.size() ? x[re] : ema::kNaN,
+                                                          b.IsComplex() && re + 1 < x.size() ? x[re + 1] : 0.0};
+                    }
+                  }
+                  d["node"] = node_ids, d["values"] = values, d["complex"] = b.IsComplex();
+                } else if constexpr (std::is_same_v<T, uff::Function58>) {
+                  d["id"] = strings(b.id);
+                  d["function_type"] = b.function_type, d["load_case"] = b.load_case;
+                  d["response_node"] = b.response_node, d["response_direction"] = b.response_direction;
+                  d["reference_node"] = b.reference_node, d["reference_direction"] = b.reference_direction;
+                  d["binary"] = b.binary;
+                  const auto n = static_cast<py::ssize_t>(b.count);
+                  py::array_t<double> x(n);
+                  auto xv = x.mutable_unchecked<1>();
+                  for (py::ssize_t i = 0; i < n; ++i) xv(i) = b.X(i);
+                  d["x"] = x;
+                  if (b.IsComplex()) {
+                    py::array_t<std::complex<double>> y(n);
+                    auto yv = y.mutable_unchecked<1>();
+                    for (py::ssize_t i = 0; i < n && static_cast<size_t>(2 * i + 1) < b.y.size(); ++i) yv(i) = {b.y[2 * i], b.y[2 * i + 1]};
+                    d["y"] = y;
+                  } else {
+                    py::array_t<double> y(n);
+                    auto yv = y.mutable_unchecked<1>();
+                    for (py::ssize_t i = 0; i < n && static_cast<size_t>(i) < b.y.size(); ++i) yv(i) = b.y[static_cast<size_t>(i)];
+                    d["y"] = y;
+                  }
+                  py::list axes;
+                  for (const auto& a : b.axes)
+                    axes.append(py::dict(py::arg("specific_data_type") = a.specific_data_type,
+                                         py::arg("label") = ema::formats::JsonText(a.label), py::arg("units") = ema::formats::JsonText(a.units)));
+                  d["axes"] = axes;
+                } else {
+                  d["lines"] = strings(b.lines);  // a dataset the library does not decode, verbatim
+                }
+              },
+              ds.body);
+          out.append(d);
+        }
+        return out;
+      },
+      py::arg("path"),
+      "Every dataset of a UFF file (15, 18, 55, 58/58b, 82, 151, 164, 2411, 2420; others verbatim as\n"
+      "'lines') as a list of dicts, each with 'number' (the dataset type), 'line' (where it starts) and its\n"
+      "fields: 58 gives function_type (1 time, 4 FRF, 6 coherence, 12 spectrum, ...), response/reference\n"
+      "node and direction, 'x' and 'y' (complex when the data are); 55 gives 'node' and 'values' (nodes x\n"
+      "values per node, complex); 15/2411 'nodes' with label and xyz.");
 
   // The writers of the CLI's files: what `ema fit -o` / `--json` and `ema frf -o` write, from the
   // dicts the readers and ema.fit return (issue 41). An output naming the input is refused.

@@ -6,7 +6,7 @@ and quality return them wrapped in ema.Result, a dict subclass). Inputs that tak
 a ModesDict (what fit, read_modes and model_modes return) or a dict in `ema fit --json`'s layout
 (ModesJson).
 """
-from typing import Any, Literal, Mapping, Sequence, Tuple, Union
+from typing import Any, Dict, List, Literal, Mapping, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -44,6 +44,9 @@ def read_frfs(path: Path) -> FrfDict:
 
 def read_modes(path: Path) -> ModesDict:
     """Reads mode shapes (UFF 55, FE modes as UFF 2414, or MODES.json) with their geometry as a modes dict."""
+
+def read_uff(path: Path) -> List[Dict[str, Any]]:
+    """Every dataset of a UFF file as a dict: 'number', 'line' and its fields (see the docstring)."""
 
 def write_modes(modes: Union[Path, Mapping[str, Any]], path: Path, *, binary: bool = False) -> None:
     """Modes as UFF 55 (or JSON when path ends in .json), read back by read_modes."""

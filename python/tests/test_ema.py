@@ -2,6 +2,7 @@
 full precision (JSON) must come back from Python bit for bit; FRFs written to UFF (13 significant
 digits) agree to that last digit."""
 import ast
+import os
 import pathlib
 import re
 
@@ -400,3 +401,35 @@ def test_estimate_frfs_from_arrays_equals_the_same_records_from_a_file(tmp_path)
         ema.estimate_frfs(force=force, response=response, fs=fs, dofs=dofs)
     with pytest.raises(TypeError, match="not both"):
         ema.estimate_frfs(tmp_path / "hits.csv", force=force, response=response, fs=fs, dofs=dofs, reference=(101, "+Z"))
+
+
+def test_read_uff_gives_every_dataset_as_ema_info_counts_them(tmp_path):
+    # issue 41: every dataset the library reads, as dicts. The counts per dataset type equal
+    # `ema info --json`'s; the 58 records' values equal read_frfs's FRFs; a file's geometry
+    # equals read_modes's; the 58b records read as the ASCII ones do.
+    real = pathlib.Path(os.environ.get("EMA_REAL_DATA_DIR", pathlib.Path(SOURCE) / "tests" / "data" / "real")) / "uff" / "pyuff"
+    for name in ("TestLab 161 164 18 15 82.uff", "Sample_UFF58_ascii.uff", "Sample_UFF58b_bin.uff"):
+        path = real / name
+        datasets = ema.read_uff(path)
+        run_ema("info", path, "--json", tmp_path / "info.json")
+        counts = {}
+        for d in datasets:
+            counts[str(d["number"])] = counts.get(str(d["number"]), 0) + 1
+        assert counts == load_json(tmp_path / "info.json")["datasets"], name
+    ascii_, binary = (ema.read_uff(real / n) for n in ("Sample_UFF58_ascii.uff", "Sample_UFF58b_bin.uff"))
+    f58a = [d for d in ascii_ if d["number"] == 58]
+    f58b = [d for d in binary if d["number"] == 58]
+    assert f58b and all(d["binary"] for d in f58b) and not any(d["binary"] for d in f58a)
+    for a, b in zip(f58a, f58b):
+        assert (a["response_node"], a["response_direction"]) == (b["response_node"], b["response_direction"])
+        # The ASCII file holds 6 significant digits (5e-7 of these values), the binary one all of them.
+        np.testing.assert_allclose(b["y"], a["y"], rtol=1e-5, atol=1e-6 * np.abs(a["y"]).max())
+    geometry = ema.read_uff(real / "TestLab 161 164 18 15 82.uff")
+    nodes = [d for d in geometry if d["number"] == 15][0]["nodes"]
+    assert nodes["xyz"].shape == (len(nodes["label"]), 3)
+    traces = [d for d in geometry if d["number"] == 82]
+    assert len(traces) == 3 and all(len(t["nodes"]) > 1 for t in traces)
+    with pytest.raises(TypeError, match="path"):
+        ema.read_uff(42)
+    with pytest.raises(ValueError, match="missing.uff"):
+        ema.read_uff(tmp_path / "missing.uff")
