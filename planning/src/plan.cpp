@@ -45,11 +45,16 @@ std::vector<Dof> TestPlan::Sensors() const {
 
 namespace {
 
-// log det of the Fisher information ΦᵀΦ of `rows`, regularised by a trace share so that a set
-// with fewer rows than modes still orders (it is singular: every such set scores about alike).
-double LogDetInformation(const Eigen::MatrixXd& info) {
+// The Fisher information ΦᵀΦ regularised by a trace share, so that a set with fewer rows than
+// modes still orders (it is singular: every such set scores about alike).
+Eigen::MatrixXd Regularised(const Eigen::MatrixXd& info) {
   const double ridge = 1e-10 * std::max(info.trace(), 1e-300) / std::max<Eigen::Index>(1, info.rows());
-  Eigen::LLT<Eigen::MatrixXd> llt(info + ridge * Eigen::MatrixXd::Identity(info.rows(), info.cols()));
+  return info + ridge * Eigen::MatrixXd::Identity(info.rows(), info.cols());
+}
+
+// log det of the regularised information.
+double LogDetInformation(const Eigen::MatrixXd& info) {
+  Eigen::LLT<Eigen::MatrixXd> llt(Regularised(info));
   if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
   return 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
 }
@@ -110,9 +115,7 @@ std::vector<int> ChooseSensorGroups(const Eigen::MatrixXd& shapes, const std::ve
   // summed per group; the group holding least goes, until `count` are left.
   while (static_cast<int>(chosen.size()) > count) {
     const Eigen::MatrixXd info = GroupInformation(shapes, RowsOf(groups, chosen));
-    const double ridge = 1e-10 * std::max(info.trace(), 1e-300) / std::max<Eigen::Index>(1, info.rows());
-    const Eigen::MatrixXd inverse =
-        (info + ridge * Eigen::MatrixXd::Identity(info.rows(), info.cols())).ldlt().solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
+    const Eigen::MatrixXd inverse = Regularised(info).ldlt().solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
     int worst = -1;
     double worst_share = std::numeric_limits<double>::infinity();
     for (size_t k = 0; k < chosen.size(); ++k) {
@@ -353,7 +356,6 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
     for (Eigen::Index j = 0; j < m; ++j) f(j) = modes.modes[target[j]].frequency_hz;
     return f;
   }();
-  // The separation of readings a and b at the sensor rows: frequencies and 1 − MAC in σ.
   const size_t n_readings = predicted.size();
   std::vector<std::vector<Eigen::Index>> partner(n_readings * n_readings);  // [a·n + b][j]: b's mode for a's target j
   for (size_t a = 0; a < n_readings; ++a)
@@ -365,29 +367,6 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
   // sensors over RMS at every candidate, PlannedMode::observability).
   constexpr double kSeen = 0.3;
   const Eigen::VectorXd mean_square = shapes.colwise().squaredNorm().transpose() / static_cast<double>(c);
-  auto seen = [&](Eigen::Index j, const std::vector<int>& rows) {
-    double sum = 0.0;
-    for (int r : rows) sum += shapes(r, j) * shapes(r, j);
-    return !rows.empty() && sum / static_cast<double>(rows.size()) >= kSeen * kSeen * mean_square(j);
-  };
-  auto separation = [&](size_t a, size_t b, const std::vector<int>& rows) {
-    double sum = 0.0;
-    for (Eigen::Index j = 0; j < m; ++j) {
-      const Eigen::Index ka = target[j], kb = partner[a * n_readings + b][static_cast<size_t>(j)];
-      if (kb < 0 || !excited(j) || !seen(j, rows)) continue;
-      const double df = (predicted[a].hz(ka) - predicted[b].hz(kb)) / (options.frequency_sigma_rel * target_hz(j));
-      double shape = 0.0;
-      if (!rows.empty()) {
-        Eigen::VectorXcd x(static_cast<Eigen::Index>(rows.size())), y(static_cast<Eigen::Index>(rows.size()));
-        for (size_t k = 0; k < rows.size(); ++k)
-          x(static_cast<Eigen::Index>(k)) = predicted[a].shapes(rows[k], ka), y(static_cast<Eigen::Index>(k)) = predicted[b].shapes(rows[k], kb);
-        const double mac = x.squaredNorm() > 0.0 && y.squaredNorm() > 0.0 ? correlation::Mac(x, y) : 1.0;
-        shape = (1.0 - mac) / options.shape_sigma;
-      }
-      sum += df * df + shape * shape;
-    }
-    return std::sqrt(sum);
-  };
   const std::vector<int> for_modes = chosen;
   if (predicted.size() >= 2) {
     // The exchange judges thousands of sets: per pair of readings and target mode, the sums Σx²,
@@ -442,22 +421,24 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
       for (int g : set) add(&st, g, 1.0);
       return st;
     };
-    // The smallest over the pairs of `separation` below (the reported figure), from the sums.
+    // The separation of pair q at a set (its sums): frequencies and 1 − MAC in σ over the target
+    // modes the references excite and the set sees — the figure reported and the exchange's.
+    auto separation_of = [&](const State& st, size_t q) {
+      double sum = 0.0;
+      for (Eigen::Index j = 0; j < m; ++j) {
+        const size_t slot = q * static_cast<size_t>(m) + static_cast<size_t>(j);
+        if (!usable[slot] || st.rows == 0 || st.seen[static_cast<size_t>(j)] / static_cast<double>(st.rows) < kSeen * kSeen * mean_square(j))
+          continue;
+        const Sums& t = st.sums[slot];
+        const double mac = t.xx > 0.0 && t.yy > 0.0 ? t.xy * t.xy / (t.xx * t.yy) : 1.0;
+        const double shape = (1.0 - mac) / options.shape_sigma;
+        sum += frequency_term[slot] + shape * shape;
+      }
+      return std::sqrt(sum);
+    };
     auto smallest_of = [&](const State& st) {
       double worst = std::numeric_limits<double>::infinity();
-      for (size_t q = 0; q < pairs.size(); ++q) {
-        double sum = 0.0;
-        for (Eigen::Index j = 0; j < m; ++j) {
-          const size_t slot = q * static_cast<size_t>(m) + static_cast<size_t>(j);
-          if (!usable[slot] || st.rows == 0 || st.seen[static_cast<size_t>(j)] / static_cast<double>(st.rows) < kSeen * kSeen * mean_square(j))
-            continue;
-          const Sums& t = st.sums[slot];
-          const double mac = t.xx > 0.0 && t.yy > 0.0 ? t.xy * t.xy / (t.xx * t.yy) : 1.0;
-          const double shape = (1.0 - mac) / options.shape_sigma;
-          sum += frequency_term[slot] + shape * shape;
-        }
-        worst = std::min(worst, std::sqrt(sum));
-      }
+      for (size_t q = 0; q < pairs.size(); ++q) worst = std::min(worst, separation_of(st, q));
       return worst;
     };
     // Exchange for the smallest separation, keeping the AutoMAC within its limit (or no worse
@@ -491,11 +472,10 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
       current = state_of(chosen);
       value = best;
     }
-    const std::vector<int> before = keep.empty() ? for_modes : fixed;
-    const std::vector<int> before_rows = RowsOf(groups, before), after_rows = RowsOf(groups, chosen);
-    for (size_t a = 0; a < predicted.size(); ++a)
-      for (size_t b = a + 1; b < predicted.size(); ++b)
-        plan.separations.push_back({readings[a].label, readings[b].label, separation(a, b, before_rows), separation(a, b, after_rows)});
+    const State before = state_of(keep.empty() ? for_modes : fixed);
+    for (size_t q = 0; q < pairs.size(); ++q)
+      plan.separations.push_back({readings[pairs[q].first].label, readings[pairs[q].second].label, separation_of(before, q),
+                                  separation_of(current, q)});
   }
 
   // Roving sets: the kept sets as they were, then the new groups by test point, in sets.
