@@ -4,8 +4,6 @@
 #include "ema/formats/diagnosis_readings.hpp"
 
 #include <algorithm>
-#include <cctype>
-#include <charconv>
 #include <cstdint>
 #include <fstream>
 #include <limits>
@@ -14,41 +12,13 @@
 #include <toml++/toml.h>
 
 #include "ema/core/error.hpp"
+#include "toml_text.hpp"
 #include "effect_toml.hpp"
 
 namespace ema::formats {
 namespace {
 
 // (Helper names unique in the formats target: it is a unity build.)
-
-// The shortest text that reads back to the same double, as a TOML float.
-std::string ReadingNumber(double v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  std::string s(buf, r.ptr);
-  if (s.find_first_of(".eEni") == std::string::npos) s += ".0";
-  return s;
-}
-
-// A TOML basic string (the JSON text is valid UTF-8; control bytes escaped).
-std::string ReadingQuoted(const std::string& text) {
-  std::string q = "\"";
-  for (const char c : text) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '"' || c == '\\') {
-      q += '\\';
-      q += c;
-    } else if (u < 0x20 || u == 0x7f) {
-      static const char kHex[] = "0123456789abcdef";
-      q += "\\u00";
-      q += kHex[u >> 4];
-      q += kHex[u & 15];
-    } else {
-      q += c;
-    }
-  }
-  return q + "\"";
-}
 
 // The line of a byte offset, for messages on a JSON syntax error.
 int ReadingLineOf(const std::string& text, std::size_t byte) {
@@ -57,28 +27,16 @@ int ReadingLineOf(const std::string& text, std::size_t byte) {
   return line;
 }
 
-// `message` of an error raised for `origin` without its "origin:line: " prefix: the line counts
-// in the TOML text built here, which the user never sees.
-std::string ReadingWhat(const std::string& message, const std::string& origin) {
-  if (message.compare(0, origin.size(), origin) != 0) return message;
-  std::size_t i = origin.size();
-  if (i < message.size() && message[i] == ':') {
-    std::size_t j = i + 1;
-    while (j < message.size() && std::isdigit(static_cast<unsigned char>(message[j]))) ++j;
-    if (j > i + 1) i = j;
-  }
-  if (message.compare(i, 2, ": ") == 0) i += 2;
-  return message.substr(i);
-}
-
 class DiagnosisJsonReader {
  public:
-  explicit DiagnosisJsonReader(const std::filesystem::path& path) : path_(path), file_(path.string()) {}
+  /// `origin` names the source in messages; relative law files resolve against `base_dir`.
+  DiagnosisJsonReader(std::string origin, std::filesystem::path base_dir)
+      : base_dir_(std::move(base_dir)), file_(std::move(origin)) {}
 
-  std::vector<DiagnosisReading> Read() const {
+  std::vector<DiagnosisReading> ReadFile(const std::filesystem::path& path) const {
     std::error_code ec;
-    if (!std::filesystem::exists(path_, ec)) throw InputError(file_, "diagnosis file not found");
-    std::ifstream in(path_, std::ios::binary);
+    if (!std::filesystem::exists(path, ec)) throw InputError(file_, "diagnosis file not found");
+    std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(file_, "cannot open the diagnosis file");
     std::stringstream buffer;
     buffer << in.rdbuf();
@@ -90,6 +48,10 @@ class DiagnosisJsonReader {
       throw InputError(file_ + ":" + std::to_string(ReadingLineOf(text, e.byte)),
                        "not valid JSON (" + std::string(e.what()) + "); expected the JSON of `ema diagnose --json`");
     }
+    return Read(root);
+  }
+
+  std::vector<DiagnosisReading> Read(const nlohmann::json& root) const {
     if (!root.is_object() || !root.contains("candidates") || !root["candidates"].is_array())
       throw InputError(file_, "no \"candidates\" array: expected the JSON of `ema diagnose --json` "
                               "({\"candidates\": [{\"rank\", \"kind\", \"target\", \"effects\", ...}]})");
@@ -142,14 +104,14 @@ class DiagnosisJsonReader {
   // [[effect]] block, read by the model file's reader.
   model::Effect Effect(const nlohmann::json& e, const std::string& where) const {
     if (!e.is_object()) throw InputError(file_, where + ": expected an object, found " + std::string(e.type_name()));
-    std::string text = "[[effect]]\nkind = " + ReadingQuoted(String(e, "kind", where)) +
-                       "\ntarget = " + ReadingQuoted(String(e, "target", where)) + "\n";
+    std::string text = "[[effect]]\nkind = " + TomlString(String(e, "kind", where)) +
+                       "\ntarget = " + TomlString(String(e, "target", where)) + "\n";
     if (const auto p = e.find("parameters"); p != e.end()) {
       if (!p->is_object()) throw InputError(file_, where + ": key 'parameters': expected an object {name: number}");
       for (const auto& [name, value] : p->items()) {
         if (!value.is_number())
           throw InputError(file_, where + ": parameter '" + name + "': expected a number, found " + value.dump());
-        text += ReadingQuoted(name) + " = " + ReadingNumber(value.get<double>()) + "\n";
+        text += TomlString(name) + " = " + TomlFloat(value.get<double>()) + "\n";
       }
     }
     if (const auto l = e.find("law"); l != e.end() && !l->is_null()) {
@@ -169,22 +131,30 @@ class DiagnosisJsonReader {
     const std::string origin = file_ + ": " + where;
     model::Effect effect;
     try {
-      effect = ParseEffectToml(text, origin, path_.parent_path());
+      effect = ParseEffectToml(text, origin, base_dir_);
     } catch (const InputError& x) {
-      throw InputError(origin, ReadingWhat(x.what(), origin));
+      // Said at the candidate: the line counts in the TOML text built here, which the user never
+      // sees (an error in a curve file the law names keeps that file's place).
+      const bool here = x.Where().compare(0, origin.size(), origin) == 0;
+      throw InputError(origin, here ? x.Detail() : x.what());
     }
     effect.line = 0;  // no line of a file
     return effect;
   }
 
-  std::filesystem::path path_;
+  std::filesystem::path base_dir_;
   std::string file_;
 };
 
 }  // namespace
 
 std::vector<DiagnosisReading> ReadDiagnosisReadings(const std::filesystem::path& path) {
-  return DiagnosisJsonReader(path).Read();
+  return DiagnosisJsonReader(path.string(), path.parent_path()).ReadFile(path);
+}
+
+std::vector<DiagnosisReading> ReadDiagnosisReadings(const nlohmann::json& diagnosis, const std::string& origin,
+                                                    const std::filesystem::path& base_dir) {
+  return DiagnosisJsonReader(origin, base_dir).Read(diagnosis);
 }
 
 }  // namespace ema::formats

@@ -18,6 +18,7 @@
 #include "ema/formats/matrix_market.hpp"
 #include "ema/formats/toml_fields.hpp"
 #include "effect_toml.hpp"
+#include "toml_text.hpp"
 #include "text_lines.hpp"
 #include "ema/formats/uff.hpp"
 #include "ema/model/air_film.hpp"
@@ -664,12 +665,7 @@ std::string LawToToml(const model::Law& law) {
 }
 
 std::string EffectToToml(const model::Effect& e) {
-  auto quote = [](const std::string& s) {
-    std::string q = "\"";
-    for (char c : s) q += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
-    return q + "\"";
-  };
-  std::string s = "[[effect]]\nkind = " + quote(e.kind) + "\ntarget = " + quote(e.target) + "\n";
+  std::string s = "[[effect]]\nkind = " + TomlString(e.kind) + "\ntarget = " + TomlString(e.target) + "\n";
   const bool k_as_law = e.kind == "series_compliance" && !e.law && e.parameters.count("k");
   for (const auto& [k, v] : e.parameters)
     if (!(k_as_law && k == "k")) s += k + " = " + Num(v) + "\n";

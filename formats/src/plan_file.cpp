@@ -1,9 +1,7 @@
 #include "ema/formats/plan_file.hpp"
 
 #include <cctype>
-#include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <set>
@@ -14,6 +12,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/toml_fields.hpp"
+#include "toml_text.hpp"
 
 namespace ema::formats {
 
@@ -232,34 +231,6 @@ namespace {
 
 // (Helper names unique in the formats target: it is a unity build.)
 
-// The shortest text that reads back to the same double, as a TOML float ("2.0", "0.1", "1e-05", "nan").
-std::string PlanNumber(double v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  std::string s(buf, r.ptr);
-  if (s.find_first_of(".eEni") == std::string::npos) s += ".0";
-  return s;
-}
-
-// A TOML basic string.
-std::string PlanQuoted(const std::string& text) {
-  std::string q = "\"";
-  for (const char c : text) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '"' || c == '\\') {
-      q += '\\';
-      q += c;
-    } else if (u < 0x20 || u == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", u);
-      q += buf;
-    } else {
-      q += c;
-    }
-  }
-  return q + "\"";
-}
-
 // Bit-for-bit the same value as ReadPlanFile gives back (0.0 and -0.0 differ; NaN equals NaN).
 bool PlanSameNumber(double a, double b) {
   if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
@@ -275,7 +246,7 @@ std::string PlanDof(const Dof& d, const std::string& what) {
 
 std::string PlanDofArray(const std::vector<Dof>& dofs, const std::string& what) {
   std::string s = "[";
-  for (std::size_t i = 0; i < dofs.size(); ++i) s += (i ? ", " : "") + PlanQuoted(PlanDof(dofs[i], what));
+  for (std::size_t i = 0; i < dofs.size(); ++i) s += (i ? ", " : "") + TomlString(PlanDof(dofs[i], what));
   return s + "]";
 }
 
@@ -327,17 +298,17 @@ std::string PlanToToml(const Plan& plan, const std::string& comment) {
   const double plan_mass = shared_mass ? PlanBaseMass(plan.sets.front()) : 0.0;
 
   s += "[plan]\n";
-  if (!plan.setup.empty()) s += "setup = " + PlanQuoted(plan.setup) + "\n";
+  if (!plan.setup.empty()) s += "setup = " + TomlString(plan.setup) + "\n";
   s += "references = " + PlanDofArray(h.references, "reference") + "\n";
-  s += "sample_rate_hz = " + PlanNumber(h.sample_rate_hz) + "\n";
+  s += "sample_rate_hz = " + TomlFloat(h.sample_rate_hz) + "\n";
   s += "samples = " + std::to_string(h.samples_per_record) + "\n";
-  s += "pre_trigger = " + PlanNumber(h.pre_trigger_fraction) + "\n";
+  s += "pre_trigger = " + TomlFloat(h.pre_trigger_fraction) + "\n";
   s += "impacts = " + std::to_string(h.impacts_per_reference) + "\n";
-  s += "force_peak_n = " + PlanNumber(h.force_peak_n) + "\n";
-  s += "force_spread = " + PlanNumber(h.force_spread) + "\n";
-  s += "pulse_duration_s = " + PlanNumber(h.pulse_duration_s) + "\n";
-  s += "force_noise = " + PlanNumber(h.force_noise) + "\n";
-  s += "response_noise = " + PlanNumber(h.response_noise) + "\n";
+  s += "force_peak_n = " + TomlFloat(h.force_peak_n) + "\n";
+  s += "force_spread = " + TomlFloat(h.force_spread) + "\n";
+  s += "pulse_duration_s = " + TomlFloat(h.pulse_duration_s) + "\n";
+  s += "force_noise = " + TomlFloat(h.force_noise) + "\n";
+  s += "response_noise = " + TomlFloat(h.response_noise) + "\n";
   s += std::string("noise_relative_to_peak = ") + (h.noise_relative_to_peak ? "true" : "false") + "\n";
   switch (h.response_quantity) {
     case Quantity::kAcceleration: s += "response = \"acceleration\"\n"; break;
@@ -347,7 +318,7 @@ std::string PlanToToml(const Plan& plan, const std::string& comment) {
       throw std::invalid_argument("PlanToToml: response quantity " + std::to_string(static_cast<int>(h.response_quantity)) +
                                   " is not acceleration, velocity or displacement");
   }
-  if (shared_mass && !PlanSameNumber(plan_mass, 0.0)) s += "sensor_mass = " + PlanNumber(plan_mass) + "\n";
+  if (shared_mass && !PlanSameNumber(plan_mass, 0.0)) s += "sensor_mass = " + TomlFloat(plan_mass) + "\n";
   // ReadPlanFile reads the seed as an int and converts it: a negative one stands for 2^64 - |seed|.
   const auto seed = static_cast<std::int64_t>(h.seed);
   if (seed < std::numeric_limits<int>::min() || seed > std::numeric_limits<int>::max())
@@ -355,20 +326,20 @@ std::string PlanToToml(const Plan& plan, const std::string& comment) {
   s += "seed = " + std::to_string(seed) + "\n";
   s += std::string("trigger_jitter = ") + (h.trigger_jitter ? "true" : "false") + "\n";
   s += "oversampling = " + std::to_string(h.oversampling) + "\n";
-  if (!std::isnan(h.response_full_scale)) s += "response_full_scale = " + PlanNumber(h.response_full_scale) + "\n";
-  if (!std::isnan(h.force_full_scale)) s += "force_full_scale = " + PlanNumber(h.force_full_scale) + "\n";
+  if (!std::isnan(h.response_full_scale)) s += "response_full_scale = " + TomlFloat(h.response_full_scale) + "\n";
+  if (!std::isnan(h.force_full_scale)) s += "force_full_scale = " + TomlFloat(h.force_full_scale) + "\n";
   if (!h.force_levels_n.empty()) {
     s += "force_levels_n = [";
-    for (std::size_t i = 0; i < h.force_levels_n.size(); ++i) s += (i ? ", " : "") + PlanNumber(h.force_levels_n[i]);
+    for (std::size_t i = 0; i < h.force_levels_n.size(); ++i) s += (i ? ", " : "") + TomlFloat(h.force_levels_n[i]);
     s += "]\n";
   }
   if (plan.time_integration) s += "integration = \"time\"\n";
 
   for (const RovingSet& set : plan.sets) {
-    s += "\n[[set]]\nname = " + PlanQuoted(set.name) + "\n";
+    s += "\n[[set]]\nname = " + TomlString(set.name) + "\n";
     s += "sensors = " + PlanDofArray(set.sensors, "sensor") + "\n";
     const double base = shared_mass ? plan_mass : PlanBaseMass(set);
-    if (!shared_mass) s += "sensor_mass = " + PlanNumber(base) + "\n";
+    if (!shared_mass) s += "sensor_mass = " + TomlFloat(base) + "\n";
     std::map<int, double> table;  // what the base mass of the set does not give
     std::set<int> sensor_points;
     for (const Dof& d : set.sensors) sensor_points.insert(d.node);
@@ -384,7 +355,7 @@ std::string PlanToToml(const Plan& plan, const std::string& comment) {
       s += "masses = { ";
       bool first = true;
       for (const auto& [p, m] : table) {
-        s += (first ? "" : ", ") + std::to_string(p) + " = " + PlanNumber(m);
+        s += (first ? "" : ", ") + std::to_string(p) + " = " + TomlFloat(m);
         first = false;
       }
       s += " }\n";
@@ -401,21 +372,21 @@ std::string PlanToToml(const Plan& plan, const std::string& comment) {
     if (r < 0 || r >= static_cast<int>(h.references.size()))
       throw std::invalid_argument("PlanToToml: " + what + " at reference index " + std::to_string(r) + ", the plan has " +
                                   std::to_string(h.references.size()) + " references");
-    return PlanQuoted(PlanDof(h.references[static_cast<std::size_t>(r)], "reference"));
+    return TomlString(PlanDof(h.references[static_cast<std::size_t>(r)], "reference"));
   };
   for (const acquisition::DoubleHit& d : h.double_hits) {
     s += "\n[[double_hit]]\nset = " + set_number(d.set, "a double hit") + "\n";
     s += "reference = " + reference(d.reference, "a double hit") + "\n";
     s += "impact = " + std::to_string(d.impact) + "\n";
-    s += "delay_s = " + PlanNumber(d.delay_s) + "\n";
-    s += "ratio = " + PlanNumber(d.ratio) + "\n";
+    s += "delay_s = " + TomlFloat(d.delay_s) + "\n";
+    s += "ratio = " + TomlFloat(d.ratio) + "\n";
   }
   for (const acquisition::Clipping& c : h.clipping) {
     s += "\n[[overload]]\nset = " + set_number(c.set, "an overload") + "\n";
     s += "reference = " + reference(c.reference, "an overload") + "\n";
     s += "impact = " + std::to_string(c.impact) + "\n";
-    s += "channel = " + (c.force ? std::string("\"force\"") : PlanQuoted(PlanDof(c.channel, "overload channel"))) + "\n";
-    s += "full_scale = " + PlanNumber(c.full_scale) + "\n";
+    s += "channel = " + (c.force ? std::string("\"force\"") : TomlString(PlanDof(c.channel, "overload channel"))) + "\n";
+    s += "full_scale = " + TomlFloat(c.full_scale) + "\n";
   }
   return s;
 }
