@@ -396,8 +396,8 @@ ModeSet ModeSetFromArrays(const py::dict& d, const std::string& label) {
 /// A file that is removed when it goes out of scope.
 struct TemporaryFile {
   std::filesystem::path path;
-  explicit TemporaryFile(const std::string& text, const std::string& prefix = "ema-modes") {
-    std::string name = (std::filesystem::temp_directory_path() / (prefix + "-XXXXXX")).string();
+  explicit TemporaryFile(const std::string& text) {
+    std::string name = (std::filesystem::temp_directory_path() / "ema-modes-XXXXXX").string();
     const int fd = mkstemp(name.data());
     if (fd < 0) throw std::runtime_error("cannot create a temporary file in " + std::filesystem::temp_directory_path().string());
     close(fd);
@@ -814,13 +814,12 @@ std::vector<ema::formats::DiagnosisReading> DiagnosisReadingsOf(const py::object
   if (!IsMapping(o))
     throw py::type_error("candidates: expected None, a DIAG.json path or the dict ema.diagnose returns, found " + TypeName(o));
   *origin = "candidates";
-  const TemporaryFile file(JsonText(py::dict(o), "candidates", "the layout of `ema diagnose --json` (what ema.diagnose returns)"),
-                           "ema-diag");
-  try {
-    return ema::formats::ReadDiagnosisReadings(file.path);
-  } catch (const ema::InputError& e) {
-    throw ema::InputError(ReplaceAll(e.what(), file.path.string(), "candidates"));
-  }
+  // Read by the DIAG.json reader itself, from the JSON, so that it means what the same JSON in a
+  // file means to `ema plan --candidates`; a law's relative curve files resolve against the
+  // working folder.
+  const nlohmann::json diagnosis = nlohmann::json::parse(
+      JsonText(py::dict(o), "candidates", "the layout of `ema diagnose --json` (what ema.diagnose returns)"));
+  return ema::formats::ReadDiagnosisReadings(diagnosis, "candidates", std::filesystem::current_path());
 }
 
 /// None, or the path `o` names; TypeError naming the argument otherwise.
@@ -1628,8 +1627,7 @@ PYBIND11_MODULE(_ema, m) {
       "candidates: None, the path of a DIAG.json (`ema diagnose --json`), or the dict ema.diagnose returns:\n"
       "  rank 1 and every other candidate within a factor 20 of its probability (at least 0.001; 'none' left\n"
       "  out; at most 10) are the readings the plan separates. A law's relative `file =` path in a dict's\n"
-      "  effects resolves against the temporary folder: give absolute paths there (ema.diagnose writes laws\n"
-      "  inline, without files).\n"
+      "  effects resolves against the working folder (ema.diagnose writes laws inline, without files).\n"
       "keep: None or the path of an earlier plan (TOML): its settings and sets stay, `sets` new ones are added.\n"
       "output: None or the path to write the plan file (PLAN.toml, what `ema simulate --plan` reads); an\n"
       "  output naming an input (model, candidates, keep) is refused (ValueError).\n\n"

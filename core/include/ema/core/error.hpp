@@ -14,12 +14,18 @@ namespace ema {
 /// \xNN, so what() is never cut short at a NUL and never garbles a terminal.
 class InputError : public std::runtime_error {
  public:
-  explicit InputError(const std::string& what) : std::runtime_error(Printable(what)) {}
+  explicit InputError(const std::string& what) : std::runtime_error(Printable(what)), detail_(Printable(what)) {}
   explicit InputError(const char* what) : InputError(std::string(what)) {}
 
   /// Builds "where: what" (where = "file:line" or "file, record N").
   InputError(const std::string& where, const std::string& what)
-      : std::runtime_error(Printable(where.empty() ? what : where + ": " + what)) {}
+      : std::runtime_error(Printable(where.empty() ? what : where + ": " + what)), where_(Printable(where)),
+        detail_(Printable(what)) {}
+
+  /// The two parts of the message ("" and the whole message when it was given as one), for a
+  /// caller that names the place in its own words (a text it built and the user never saw).
+  const std::string& Where() const { return where_; }
+  const std::string& Detail() const { return detail_; }
 
   /// `text` with bytes below 0x20 (except newline and tab) and 0x7f written as \xNN, cut to
   /// 4000 bytes (a message quoting a huge garbage field stays readable).
@@ -44,6 +50,9 @@ class InputError : public std::runtime_error {
     }
     return out;
   }
+
+ private:
+  std::string where_, detail_;
 };
 
 /// A solver that did not converge on data that may well be fine (an eigensolver, a time

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -28,5 +29,10 @@ struct DiagnosisReading {
 /// model file's [[effect]] takes it (the parameters factor/value/mass/k; a law that parses).
 /// A law's relative curve `file =` paths resolve against the DIAG.json's folder.
 std::vector<DiagnosisReading> ReadDiagnosisReadings(const std::filesystem::path& path);
+
+/// The same from the JSON itself (what `ema.diagnose` returns, in Python): `origin` names it in
+/// messages, and a law's relative curve files resolve against `base_dir`.
+std::vector<DiagnosisReading> ReadDiagnosisReadings(const nlohmann::json& diagnosis, const std::string& origin,
+                                                    const std::filesystem::path& base_dir);
 
 }  // namespace ema::formats
