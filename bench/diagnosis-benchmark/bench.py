@@ -25,6 +25,7 @@ import shutil
 import subprocess
 import sys
 import time
+import tomllib
 
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree (CI runs it from there)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -260,12 +261,11 @@ def replan(ema, case, folder, tests, lo, hi, times, index):
     s, _ = tests[0]
     tag = s or "test"
     kept = f"plan-{tag}.toml"
-    with open(os.path.join(folder, kept)) as f:
-        plan_text = f.read()
-    sets = [[x for x in m.split(",") if x.strip()] for m in re.findall(r"sensors = \[([^\]]*)\]", plan_text)]
-    with open(os.path.join(folder, "nominal.toml")) as f:
-        candidates = 3 * len(re.findall(r"(?m)^\[\[point\]\]", f.read()))
-    free = candidates - len({x.strip() for st in sets for x in st})
+    with open(os.path.join(folder, kept), "rb") as f:
+        sets = [st["sensors"] for st in tomllib.load(f)["set"]]
+    with open(os.path.join(folder, "nominal.toml"), "rb") as f:
+        candidates = 3 * len(tomllib.load(f).get("point", []))
+    free = candidates - len({x for st in sets for x in st})
     per_set = min(len(sets[0]) if sets else 8, free)
     if per_set < 1:
         return {"readings": [f"{c['kind']} on {c['target']}" for c in readings], "skipped": "every DOF already measured"}

@@ -20,15 +20,9 @@ _CHILD = textwrap.dedent(
 
     bad = [None, 0, -1, 1e300, float("nan"), "", "no/such/file.unv", b"\xff", [], {}, (), [1, 2], {"a": 1},
            (1.0,), (5.0, 1.0), np.zeros(0), np.zeros((2, 2, 2)), np.array([1 + 2j]), np.array(["x"]), object()]
-    f = np.arange(0.0, 200.0, 0.5)
-    w = 2 * np.pi * f
-    h = np.zeros((1, len(f), 2), dtype=complex)
-    for fn, zeta, phi in [(40.0, 0.01, (1.0, 0.8)), (120.0, 0.02, (1.0, -0.6))]:
-        wn = 2 * np.pi * fn
-        rec = 1.0 / (wn**2 - w**2 + 2j * zeta * wn * w)
-        h[0, :, 0] += -(w**2) * phi[0] * phi[0] * rec
-        h[0, :, 1] += -(w**2) * phi[1] * phi[0] * rec
-    frfs = {"frequency_hz": f, "outputs": [(1, "+Z"), (2, "+Z")], "references": [(1, "+Z")], "h": h}
+    sys.path.insert(0, os.environ["EMA_PYTHON_TESTS"])
+    from test_ema import _two_mode_frfs  # the analytic two-mode FRFs the other tests fit
+    frfs = _two_mode_frfs()
     model = os.path.join(os.environ["EMA_SOURCE_DIR"], "samples", "guideway", "model.toml")
     fitted = ema.fit(frfs, band=(10.0, 190.0), stabilisation=True)
     first = {"fit": frfs, "mode_indicators": frfs, "synthesize": fitted, "mac": np.eye(2), "plan": model,
@@ -76,7 +70,7 @@ _CHILD = textwrap.dedent(
 
 
 def test_every_binding_raises_on_wrong_arguments_and_never_crashes(tmp_path):
-    env = dict(os.environ, MPLBACKEND="Agg")
+    env = dict(os.environ, MPLBACKEND="Agg", EMA_PYTHON_TESTS=os.path.dirname(os.path.abspath(__file__)))
     env.setdefault("EMA_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
     os.chdir(tmp_path)  # a binding that writes (plan's output) writes here
     done = subprocess.run([sys.executable, "-c", _CHILD], env=env, capture_output=True, text=True, timeout=600)
