@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "ema/formats/output_guard.hpp"
+
 namespace ema::cli {
 
 namespace po = boost::program_options;
@@ -28,18 +30,12 @@ void AddHelp(po::options_description* options);
 int NotBuiltYet(const std::string& command, const std::string& issue);
 
 /// A path a command reads or writes, with the option that named it (for messages).
-struct PathArg {
-  std::string option;  ///< e.g. "-o", "--json", "input"
-  std::string path;
-};
+using PathArg = formats::PathArg;
 
-/// cli.md "Every command: outputs never replace inputs". Throws UsageError (exit 2) naming both
-/// paths when an output resolves to one of the inputs, or two outputs to one file; paths are
-/// compared after resolving `.`/`..`, relative paths and symlinks (and hard links, by file
-/// identity). An input TOML file (model, plan, project) brings the files it names (curves, [fe]
-/// matrices, DOF maps, node lists, the project's model and data); an input folder brings the
-/// files in it. Call at the top of a command, before anything is read or written.
-void RefuseOutputsOverInputs(const std::vector<PathArg>& inputs, const std::vector<PathArg>& outputs);
+/// cli.md "Every command: outputs never replace inputs" (formats/output_guard.hpp): UsageError
+/// (exit 2) naming both paths when an output resolves to one of the inputs, or two outputs to one
+/// file. Call at the top of a command, before anything is read or written.
+using formats::RefuseOutputsOverInputs;
 
 /// The same, with the paths taken from the parsed options: the values (string or list of
 /// strings) of `input_options` and `output_options` that were given; a `NAME=PATH` input value

@@ -11,12 +11,13 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "amplitude_levels.hpp"
 #include "cli.hpp"
 #include "ema/core/error.hpp"
 #include "ema/correlation/amplitude.hpp"
+#include "ema/formats/amplitude_json.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
+#include "ema/formats/modes_sidecar.hpp"
 #include "report.hpp"
 #include "stages.hpp"
 
@@ -80,14 +81,12 @@ correlation::AmplitudeResult app::RunAmplitudeStage(const AmplitudeConfig& confi
   }
   if (!r.unpaired.empty())
     out << r.unpaired.size() << " mode(s) found at one level only (not followed)\n";
-  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, app::AmplitudeJson(r).dump(2) + "\n");
+  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, formats::AmplitudeJson(r).dump(2) + "\n");
   if (!config.report_path.empty()) {
     report::ReportInput page;
     page.title = "ema amplitude";
     page.subtitle = std::to_string(r.levels.size()) + " levels (" + correlation::LevelKindToString(kind) + ")";
-    std::istringstream lines(r.summary);
-    for (std::string line; std::getline(lines, line);) page.summary.push_back(line);
-    page.amplitude = app::AmplitudeJson(r);
+    page.amplitude = formats::AmplitudeJson(r);
     formats::WriteTextFileAtomically(config.report_path, report::RenderHtml(page));
   }
   return r;
@@ -96,7 +95,7 @@ correlation::AmplitudeResult app::RunAmplitudeStage(const AmplitudeConfig& confi
 int RunAmplitude(const std::vector<std::string>& args) {
   const std::optional<app::AmplitudeConfig> config = app::ParseAmplitudeArgs(args);
   if (!config) return 0;
-  app::RunAmplitudeStage(*config, app::ReadAmplitudeLevels(config->level_args, "--level"), std::cout);
+  app::RunAmplitudeStage(*config, formats::ReadAmplitudeLevels(config->level_args, "--level"), std::cout);
   return 0;
 }
 

@@ -66,21 +66,30 @@ std::optional<app::CorrelateConfig> app::ParseCorrelateArgs(const std::vector<st
   return config;
 }
 
-app::CorrelateStageResult app::RunCorrelateStage(const CorrelateConfig& config, const ModeSet& test,
-                                                 const ModeSet& model_modes, std::ostream& out) {
-  CorrelateStageResult stage;
-  stage.result = correlation::Correlate(test, model_modes, config.options);
+correlation::CorrelationResult app::RunCorrelateStage(const CorrelateConfig& config, const ModeSet& test,
+                                                      const ModeSet& model_modes, std::ostream& out) {
+  const correlation::CorrelationResult result = correlation::Correlate(test, model_modes, config.options);
+  WriteCorrelation(config, result, test, model_modes);
+  PrintCorrelation(config, result, test, model_modes, out);
+  return result;
+}
+
+void app::WriteCorrelation(const CorrelateConfig& config, const correlation::CorrelationResult& result, const ModeSet& test,
+                           const ModeSet& model_modes) {
+  if (!config.json_path.empty())
+    formats::WriteTextFileAtomically(config.json_path, formats::CorrelationJson(result, test, model_modes).dump(2) + "\n");
+  if (!config.table_path.empty())
+    formats::WriteTextFileAtomically(config.table_path, correlation::FormatCorrelationTable(result, config.table_format));
+}
+
+void app::PrintCorrelation(const CorrelateConfig& config, const correlation::CorrelationResult& result, const ModeSet& test,
+                           const ModeSet& model_modes, std::ostream& out) {
   // Positions matter only where nodes were paired by distance; say then when a file's length
   // unit was a guess (geometry in mm read as metres would pair nothing, or the wrong nodes).
-  if (stage.result.dof_match.nodes_by_distance > 0 || config.options.dofs.tolerance_m > 0.0)
+  if (result.dof_match.nodes_by_distance > 0 || config.options.dofs.tolerance_m > 0.0)
     for (const ModeSet* set : {&test, &model_modes})
       if (!set->geometry_units_note.empty()) std::cerr << "warning: " << set->geometry_units_note << "\n";
-  stage.json = formats::CorrelationJson(stage.result, test, model_modes);
-  out << correlation::FormatCorrelationTable(stage.result, correlation::TableFormat::kMarkdown);
-  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, stage.json.dump(2) + "\n");
-  if (!config.table_path.empty())
-    formats::WriteTextFileAtomically(config.table_path, correlation::FormatCorrelationTable(stage.result, config.table_format));
-  return stage;
+  out << correlation::FormatCorrelationTable(result, correlation::TableFormat::kMarkdown);
 }
 
 int RunCorrelate(const std::vector<std::string>& args) {

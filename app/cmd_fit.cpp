@@ -13,30 +13,23 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/json_codecs.hpp"
+#include "ema/formats/mode_indicators_json.hpp"
+#include "ema/pipeline/json.hpp"
 #include "stages.hpp"
-#include "mode_indicators_json.hpp"
 #include "plot_stabilisation.hpp"
 
 namespace ema {
 
-// Why a fit found no mode (exit 1, nothing written): said in terms of the options to change.
-static std::string NoModeReason(const curvefit::FitResult& fit, const curvefit::FitOptions& options) {
-  if (options.method == curvefit::FitMethod::kPeak) return "no mode found: no resonance peak in the band (try --band)";
-  const int orders = fit.diagram.order_max;
-  std::string why = "no mode found: no pole stayed stable over the PolyMAX orders " + std::to_string(fit.diagram.order_min) +
-                    ".." + std::to_string(orders);
-  if (orders < 4) why += " (--order-max " + std::to_string(orders) + " is too low: a stable pole must repeat over several orders)";
-  return why + "; try a higher --order-max, another --band" + (options.select_frequencies_hz.empty() ? " or --select F1,F2,..." : "");
-}
-
-std::optional<app::FitConfig> app::ParseFitArgs(const std::vector<std::string>& args, bool require_input) {
+std::optional<app::FitConfig> app::ParseFitArgs(const std::vector<std::string>& args, bool require_input,
+                                                const curvefit::FitOptions& base, const std::string& usage_given) {
   namespace po = cli::po;
-  const std::string usage =
+  const std::string usage = !usage_given.empty() ? usage_given :
       "ema fit FRF.unv -o MODES.unv [--band LO:HI] [--order-max N] [--select auto|F1,F2,...]\n"
       "        [--json MODES.json] [--stabilisation STAB.json] [--plot STAB.svg|STAB.png] [--method polymax|peak]\n"
       "        [--refine ml|none]";
   po::options_description options("ema fit: FRFs to modes (PolyMAX, stabilisation diagram, automatic selection, LSFD)");
   FitConfig config;
+  config.options = base;
   std::string band, select = "auto", method = "polymax", refine = "ml";
   int order_max = 0, threads = 0;
   curvefit::FitOptions& fit_options = config.options;
@@ -66,15 +59,16 @@ std::optional<app::FitConfig> app::ParseFitArgs(const std::vector<std::string>& 
   if (!cli::Parse(args, usage, options, positional, &vm)) return std::nullopt;
   cli::RefuseOutputsOverInputs(vm, {"input"}, {"output", "json", "stabilisation", "plot"});
 
-  if (!curvefit::StringToRefineMethod(refine, &fit_options.refine))
+  // Only what the arguments give replaces `base`.
+  if (vm.count("refine") && !curvefit::StringToRefineMethod(refine, &fit_options.refine))
     throw UsageError("--refine: expected ml or none, got '" + refine + "'");
-  if (!FromName(curvefit::kFitMethodNames, method, &fit_options.method))
+  if (vm.count("method") && !FromName(curvefit::kFitMethodNames, method, &fit_options.method))
     throw UsageError("--method: expected " + NameList(curvefit::kFitMethodNames) + ", got '" + method + "'");
   if (!band.empty()) std::tie(fit_options.data.band_lo_hz, fit_options.data.band_hi_hz) = cli::ParseBand(band);
   if (vm.count("order-max") && order_max < 1) throw UsageError("--order-max: expected a positive order");
-  fit_options.polymax.order_max = order_max;
-  fit_options.polymax.threads = threads;
-  fit_options.select_frequencies_hz = ParseSelect(select);
+  if (vm.count("order-max")) fit_options.polymax.order_max = order_max;
+  if (vm.count("threads")) fit_options.polymax.threads = threads;
+  if (vm.count("select")) fit_options.select_frequencies_hz = ParseSelect(select);
   if (std::string why; !fit_options.IsValid(&why)) throw UsageError(why);
   if (!config.plot_path.empty() && !IsSupportedPlotPath(config.plot_path))
     throw UsageError("--plot: expected a .svg or .png file name, got '" + config.plot_path + "'");
@@ -98,46 +92,38 @@ std::vector<double> app::ParseSelect(const std::string& select) {
   return frequencies_hz;
 }
 
-app::FitStageResult app::RunFitStage(const FitConfig& config, const FrfSet& frfs, std::ostream& out) {
-  const std::string& input = config.input;
-  const curvefit::FitOptions& fit_options = config.options;
-  FitStageResult stage;
-  curvefit::FitResult& fit = stage.fit;
-  try {
-    fit = curvefit::Fit(frfs, fit_options, input, [](double f, std::string_view stage) {
-      cli::DrawProgress(f, std::string(stage));
-    });
-  } catch (const InputError& e) {
-    const std::string what = e.what();
-    if (what.rfind(input, 0) == 0) throw;
-    throw InputError(input, what);
-  }
+pipeline::FitStage app::RunFitStage(const FitConfig& config, const FrfSet& frfs, std::ostream& out) {
+  pipeline::FitStage stage = pipeline::FitModes(frfs, config.options, config.input, config.output,
+                                                [](double f, std::string_view stage) { cli::DrawProgress(f, std::string(stage)); });
+  WriteFit(config, stage, frfs);
+  PrintFit(config, stage, out);
+  return stage;
+}
+
+void app::WriteFit(const FitConfig& config, const pipeline::FitStage& stage, const FrfSet& frfs) {
+  // Everything is computed before the first file is written.
+  const nlohmann::json modes_json = config.json_path.empty() ? nlohmann::json() : pipeline::FitModesJson(stage, frfs);
+  const nlohmann::json stabilisation_json =
+      config.stabilisation_path.empty() ? nlohmann::json() : pipeline::FitStabilisationJson(stage, frfs, config.input);
+  formats::WriteModeSet(config.output, stage.fit.modes);
+  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, modes_json.dump(2) + "\n");
+  if (!config.stabilisation_path.empty())
+    formats::WriteTextFileAtomically(config.stabilisation_path, stabilisation_json.dump(1) + "\n");
+  if (!config.plot_path.empty()) PlotStabilisation(config.plot_path, stage.fit.diagram, stage.fit.selected);
+}
+
+void app::PrintFit(const FitConfig& config, const pipeline::FitStage& stage, std::ostream& out) {
+  const curvefit::FitResult& fit = stage.fit;
+  const curvefit::FitOptions& fit_options = stage.options;
   for (const auto& w : fit.warnings) std::cerr << "warning: " << w << "\n";
   // What the fit handled itself is said, not warned about: nothing is left for the user to do.
   for (const auto& d : fit.dropped) {
     char hz[32];
     std::snprintf(hz, sizeof hz, "%.2f", d.frequency_hz);
-    out << "note: " << input << ": pole at " << hz << " Hz dropped: " << d.reason << "\n";
+    out << "note: " << config.input << ": pole at " << hz << " Hz dropped: " << d.reason << "\n";
   }
-  if (fit.modes.modes.empty()) throw InputError(input, NoModeReason(fit, fit_options));
-
-  fit.modes.source = input;
-  stage.modes_json = formats::FitModesJson(fit, fit_options.refine);
-  stage.modes_json.update(formats::TestSetsJson(frfs));  // roving sets and hammer DOF, when known
-  if (!config.stabilisation_path.empty()) {
-    stage.stabilisation_json = formats::StabilisationJson(fit, fit_options.stability);
-    AddModeIndicatorsJson(&stage.stabilisation_json, frfs, fit_options.data, input);  // CMIF/MMIF (docs/quality.md)
-  }
-  formats::WriteModeSet(config.output, fit.modes);
-  stage.stored_modes = formats::StoredModeSet(fit.modes, config.output);
-  stage.refine = fit_options.refine;
-  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, stage.modes_json.dump(2) + "\n");
-  if (!config.stabilisation_path.empty())
-    formats::WriteTextFileAtomically(config.stabilisation_path, stage.stabilisation_json.dump(1) + "\n");
-  if (!config.plot_path.empty()) PlotStabilisation(config.plot_path, fit.diagram, fit.selected);
-
-  out << fit.modes.modes.size() << " mode(s) from " << input << " ("
-            << (fit_options.method == curvefit::FitMethod::kPeak ? "peak picking" : "PolyMAX");
+  out << fit.modes.modes.size() << " mode(s) from " << config.input << " ("
+      << (fit_options.method == curvefit::FitMethod::kPeak ? "peak picking" : "PolyMAX");
   if (fit.transposed) out << ", roving hammer fitted by reciprocity";
   out << ")\n";
   if (fit_options.method != curvefit::FitMethod::kPeak)
@@ -148,6 +134,8 @@ app::FitStageResult app::RunFitStage(const FitConfig& config, const FrfSet& frfs
                                    [](const Mode& m) { return std::isfinite(m.frequency_std_hz); });
   if (any_std) out << "  " << fit.refine.BriefReport() << "\n";
   out << "  #   f [Hz]               zeta [%]         spread f [Hz]  spread zeta [%]  MPC     MPD [deg]\n";
+  const auto flags = out.flags();
+  const auto precision = out.precision();
   for (size_t r = 0; r < fit.modes.modes.size(); ++r) {
     const Mode& m = fit.modes.modes[r];
     std::ostringstream f, z;
@@ -158,11 +146,12 @@ app::FitStageResult app::RunFitStage(const FitConfig& config, const FrfSet& frfs
     if (std::isfinite(m.frequency_std_hz)) f << " ± " << std::setprecision(2) << m.frequency_std_hz;
     if (std::isfinite(m.damping_ratio_std)) z << " ± " << std::setprecision(2) << 100.0 * m.damping_ratio_std;
     out << std::setw(3) << r + 1 << "  " << std::left << std::setw(21) << f.str() << std::setw(17) << z.str()
-              << std::right << std::fixed << std::setprecision(3) << std::setw(12) << m.frequency_spread_hz
-              << std::setw(16) << 100.0 * m.damping_spread << std::setw(10) << m.mpc << std::setw(11)
-              << std::setprecision(1) << m.mpd << "\n";
+        << std::right << std::fixed << std::setprecision(3) << std::setw(12) << m.frequency_spread_hz
+        << std::setw(16) << 100.0 * m.damping_spread << std::setw(10) << m.mpc << std::setw(11)
+        << std::setprecision(1) << m.mpd << "\n";
   }
-  return stage;
+  out.flags(flags);
+  out.precision(precision);
 }
 
 int RunFit(const std::vector<std::string>& args) {

@@ -257,36 +257,40 @@ std::optional<app::FrfConfig> app::ParseFrfArgs(const std::vector<std::string>& 
   return config;
 }
 
-app::FrfStageResult app::RunFrfStage(const FrfConfig& config, std::ostream& out) {
-  const frf::FrfOptions& opt = config.options;
-  std::vector<acquisition::RecordSet> sets;
-  for (const std::string& path : config.inputs) {
-    for (const auto& s : sets)
-      if (s.name == path) throw UsageError("file given twice: " + path);
-    sets.push_back({path, formats::ReadTimeRecords(path)});
-  }
-  FrfStageResult stage;
+pipeline::FrfStage app::RunFrfStage(const FrfConfig& config, std::ostream& out) {
+  const auto progress = [](double f, std::string_view stage) { cli::DrawProgress(f, std::string(stage)); };
   if (config.force_bins > 0 || !config.force_bin_edges.empty()) {
-    RunFrfBins(sets, opt, config.output, config.json_path, config.binary, config.force_bins, config.force_bin_edges, out);
-    return stage;
+    std::vector<acquisition::RecordSet> sets;
+    for (const std::string& path : config.inputs) {
+      for (const auto& s : sets)
+        if (s.name == path) throw UsageError("file given twice: " + path);
+      sets.push_back({path, formats::ReadTimeRecords(path)});
+    }
+    RunFrfBins(sets, config.options, config.output, config.json_path, config.binary, config.force_bins,
+               config.force_bin_edges, out);
+    return {};
   }
-  const acquisition::HammerMeasurement test = acquisition::AssembleHammerMeasurement(std::move(sets));
-  stage.result =
-      frf::EstimateFrfs(test, opt, [](double f, std::string_view stage) { cli::DrawProgress(f, std::string(stage)); });
+  pipeline::FrfStage stage = pipeline::EstimateFrfs(config.inputs, config.options, config.binary, progress);
   cli::DrawProgress(1.0, "");
-  stage.summary_json = formats::FrfSummaryJson(stage.result);
-
   // Nothing is written unless everything above succeeded; each file goes through a temp + rename.
+  WriteFrf(config, stage);
+  PrintFrf(stage, out);
+  return stage;
+}
+
+void app::WriteFrf(const FrfConfig& config, const pipeline::FrfStage& stage) {
   formats::WriteOptions write_options;
   write_options.binary = config.binary;
   formats::WriteFrfSet(config.output, stage.result.frfs, write_options);
-  stage.stored = formats::StoredFrfSet(stage.result.frfs, write_options);
-  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, stage.summary_json.dump(2) + "\n");
+  if (!config.json_path.empty())
+    formats::WriteTextFileAtomically(config.json_path, formats::FrfSummaryJson(stage.result).dump(2) + "\n");
+}
 
+void app::PrintFrf(const pipeline::FrfStage& stage, std::ostream& out) {
   const frf::FrfSummary& s = stage.result.summary;
   const FrfSet& set = stage.result.frfs;
   out << s.frfs.size() << " FRF(s) (" << frf::EstimatorName(s.estimator) << ") from " << s.impacts
-      << " impact(s) in " << config.inputs.size() << " file(s)";
+      << " impact(s) in " << stage.file_count << " file(s)";
   if (s.roving_hammer) out << ", roving hammer (fixed sensors; the fit uses reciprocity)";
   out << "\n  " << set.LineCount() << " lines, " << set.frequency_hz[0] << " to "
       << set.frequency_hz[set.LineCount() - 1] << " Hz; exponential window: ";
@@ -301,7 +305,6 @@ app::FrfStageResult app::RunFrfStage(const FrfConfig& config, std::ostream& out)
       out << "      impact " << r.impact << " (" << r.set << "): " << r.reason << "\n";
   }
   out << std::right;
-  return stage;
 }
 
 int RunFrf(const std::vector<std::string>& args) {

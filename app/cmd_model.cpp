@@ -40,25 +40,31 @@ std::optional<app::ModelConfig> app::ParseModelArgs(const std::vector<std::strin
   return config;
 }
 
-app::ModelStageResult app::RunModelStage(const ModelConfig& config, const model::Model& m, std::ostream& out) {
+model::Solution app::RunModelStage(const ModelConfig& config, const model::Model& m, std::ostream& out) {
+  const model::Solution solution = model::Solve(m, config.options);
+  WriteModel(config, m, solution);
+  PrintModel(config, m, solution, out);
+  return solution;
+}
+
+void app::WriteModel(const ModelConfig& config, const model::Model& m, const model::Solution& solution) {
+  const nlohmann::json json = formats::ModelSolutionJson(m, solution, config.options.setup);
+  formats::WriteOptions write_options;
+  write_options.binary = config.binary;
+  formats::WriteModeSet(config.output, solution.modes, write_options);
+  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, json.dump(2) + "\n");
+}
+
+void app::PrintModel(const ModelConfig& config, const model::Model& m, const model::Solution& sol, std::ostream& out) {
   const std::string& setup = config.options.setup;
-  ModelStageResult stage;
-  stage.solution = model::Solve(m, config.options);
-  const model::Solution& sol = stage.solution;
   for (const std::string& w : sol.warnings) std::cerr << "ema model: warning: " << w << "\n";
   if (m.points.empty())
     std::cerr << "ema model: warning: " << config.model_path << " has no [[point]]: mode shapes are written without DOFs\n";
-
-  formats::WriteOptions write_options;
-  write_options.binary = config.binary;
-  formats::WriteModeSet(config.output, sol.modes, write_options);
-  stage.json = formats::ModelSolutionJson(m, sol, setup);
-  if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, stage.json.dump(2) + "\n");
-
   out << (m.name.empty() ? config.model_path : m.name) << (setup.empty() ? "" : " [" + setup + "]") << ": "
       << sol.modes.modes.size() << " modes" << (sol.sparse ? " (sparse solver)" : "") << ", "
       << sol.rigid_body_frequencies_hz.size() << " rigid-body modes\n";
   const auto flags = out.flags();
+  const auto precision = out.precision();
   out << std::fixed;
   for (std::size_t i = 0; i < sol.modes.modes.size(); ++i)
     out << "  mode " << std::setw(2) << i + 1 << "  " << std::setprecision(2) << std::setw(10)
@@ -66,7 +72,7 @@ app::ModelStageResult app::RunModelStage(const ModelConfig& config, const model:
         << 100.0 * sol.modes.modes[i].damping_ratio << " %\n";
   if (config.explain) out << model::Explain(sol);
   out.flags(flags);
-  return stage;
+  out.precision(precision);
 }
 
 int RunModel(const std::vector<std::string>& args) {

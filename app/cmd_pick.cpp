@@ -22,22 +22,6 @@ const char* const kPickUsage =
     "ema pick FRF.unv [-o MODES.unv] [--json MODES.json] [--band LO:HI] [--order-max N] [--select F1,F2,...]\n"
     "         [--port P] [--no-browser] [any other ema fit option]";
 
-// `ema fit --help`'s option list (its usage line dropped): pick takes every one of them.
-std::string FitOptionsHelp() {
-  std::ostringstream captured;
-  std::streambuf* previous = std::cout.rdbuf(captured.rdbuf());
-  try {
-    app::ParseFitArgs({"--help"});
-  } catch (...) {
-    std::cout.rdbuf(previous);
-    throw;
-  }
-  std::cout.rdbuf(previous);
-  const std::string text = captured.str();
-  const size_t options = text.find("\n\n");
-  return options == std::string::npos ? text : text.substr(options + 2);
-}
-
 }  // namespace
 
 std::optional<app::PickConfig> app::ParsePickArgs(const std::vector<std::string>& args) {
@@ -53,7 +37,10 @@ std::optional<app::PickConfig> app::ParsePickArgs(const std::vector<std::string>
   for (size_t k = 0; k < args.size(); ++k) {
     const std::string& a = args[k];
     if (a == "--help" || a == "-h") {
-      std::cout << "usage: " << kPickUsage << "\n\n" << pick_options << "\n" << FitOptionsHelp();
+      // pick's usage and its server's options, then every `ema fit` option (pick takes them all).
+      std::ostringstream head;
+      head << kPickUsage << "\n\n" << pick_options;
+      ParseFitArgs({"--help"}, /*require_input=*/false, {}, head.str());
       return std::nullopt;
     }
     if (a == "--no-browser") {
@@ -71,16 +58,8 @@ std::optional<app::PickConfig> app::ParsePickArgs(const std::vector<std::string>
       fit_args.push_back(a);
     }
   }
-  std::optional<FitConfig> fit;
-  try {
-    fit = ParseFitArgs(fit_args, /*require_input=*/false);
-  } catch (const UsageError& e) {
-    // ema fit's message, with ema pick's usage line.
-    std::string what = e.what();
-    const size_t usage = what.find("\nusage: ");
-    if (usage != std::string::npos) what = what.substr(0, usage) + "\nusage: " + kPickUsage + "\n(try --help)";
-    throw UsageError(what);
-  }
+  // ema fit's parser, with ema pick's usage line in its messages.
+  std::optional<FitConfig> fit = ParseFitArgs(fit_args, /*require_input=*/false, {}, kPickUsage);
   if (!fit) return std::nullopt;
   config.fit = std::move(*fit);
   if (config.fit.input.empty()) throw UsageError("the FRF file is required\nusage: " + std::string(kPickUsage));

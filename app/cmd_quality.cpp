@@ -3,16 +3,55 @@
 // pass/warn verdict and its reason.
 #include <iostream>
 #include <optional>
+#include <sstream>
 #include <tuple>
 
 #include "cli.hpp"
 #include "ema/core/error.hpp"
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/io.hpp"
-#include "quality_json.hpp"
+#include "ema/formats/quality_json.hpp"
 #include "stages.hpp"
 
 namespace ema {
+
+namespace {
+
+/// Human summary: one line per check that warns, counts of those that pass.
+std::string QualityText(const frf::FrfQualityReport& q, const std::vector<curvefit::ModeComplexityCheck>& modes) {
+  std::ostringstream out;
+  auto section = [&](const std::string& name, int n, int warn) {
+    out << name << ": " << n << " checked, " << warn << " warn" << (warn == 0 && n > 0 ? " (pass)" : "") << "\n";
+  };
+  int w = 0;
+  for (const auto& c : q.reciprocity) w += c.verdict == frf::Verdict::kWarn;
+  section("reciprocity", static_cast<int>(q.reciprocity.size()), w);
+  for (const auto& c : q.reciprocity) out << "  " << frf::VerdictToString(c.verdict) << "  " << c.reason << "\n";
+  w = 0;
+  for (const auto& c : q.driving_points) w += c.verdict == frf::Verdict::kWarn;
+  section("driving points", static_cast<int>(q.driving_points.size()), w);
+  for (const auto& c : q.driving_points) out << "  " << frf::VerdictToString(c.verdict) << "  " << c.reason << "\n";
+  int wc = 0, ws = 0;
+  for (const auto& s : q.frfs) {
+    wc += s.coherence_verdict == frf::Verdict::kWarn;
+    ws += s.scatter_verdict == frf::Verdict::kWarn;
+  }
+  section("coherence", q.has_coherence ? static_cast<int>(q.frfs.size()) : 0, wc);
+  section("impact-to-impact scatter", q.has_averages && q.has_coherence ? static_cast<int>(q.frfs.size()) : 0, ws);
+  for (const auto& s : q.frfs)
+    if (!s.reason.empty())
+      out << "  warn  " << DofName(s.response) << "/" << DofName(s.reference) << ": " << s.reason << "\n";
+  if (!modes.empty()) {
+    w = 0;
+    for (const auto& c : modes) w += c.verdict == frf::Verdict::kWarn;
+    section("mode complexity", static_cast<int>(modes.size()), w);
+    for (const auto& c : modes) out << "  " << frf::VerdictToString(c.verdict) << "  " << c.reason << "\n";
+  }
+  for (const auto& n : q.notes) out << "note: " << n << "\n";
+  return out.str();
+}
+
+}  // namespace
 
 std::optional<app::QualityConfig> app::ParseQualityArgs(const std::vector<std::string>& args) {
   namespace po = cli::po;
@@ -61,7 +100,7 @@ app::QualityStageResult app::RunQualityStage(const QualityConfig& config, const 
   QualityStageResult stage;
   stage.frfs = frf::CheckFrfQuality(sets, config.quality, inputs);
   if (modes_in) stage.modes = curvefit::CheckModeComplexity(*modes_in, config.complexity);
-  stage.json = QualityJson(stage.frfs, stage.modes, config.quality);
+  stage.json = formats::QualityJson(stage.frfs, stage.modes, config.quality);
   const nlohmann::json& j = stage.json;
   if (!config.json_path.empty()) formats::WriteTextFileAtomically(config.json_path, j.dump(1) + "\n");
   const std::string what = !inputs.empty() ? inputs.front() : config.modes_path;

@@ -1,12 +1,12 @@
-// The model's story across `ema run`s and the diagnosed members' places (issue 13 item 6):
-// each run into one output folder appends the model version (its [[effect]] blocks and a hash of
-// the file) and its agreement with the tests to OUTDIR/history.json, which the report draws as
-// "the error falls" over versions; the diagnosed members are located on the model for the
-// report's geometry view.
+// The model's story across `ema run`s (issue 13 item 6): each run into one output folder appends
+// the model version (its [[effect]] blocks and a hash of the file) and its agreement with the
+// tests to OUTDIR/history.json, which the report draws as "the error falls" over versions.
 #pragma once
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <vector>
 #include <string>
 
 #include "ema/model/model.hpp"
@@ -21,7 +21,12 @@ struct RunRecord {
   double mac_before = 0.0;
   double agreement_after = 0.0;      ///< of the model updated by the diagnosis
   double mac_after = 0.0;
-  nlohmann::json diagnosis;          ///< `ema diagnose --json` of the run (rank 1 is recorded)
+  /// The diagnosis's rank 1 (kind, target, probability); empty when there was no diagnosis.
+  struct RankOne {
+    std::string kind, target;
+    double probability = 0.0;
+  };
+  std::optional<RankOne> rank_one;
 };
 
 /// FNV-1a 64-bit hash of a file's bytes, as 16 hex digits ("" when it cannot be read).
@@ -32,12 +37,5 @@ std::string FileHash(const std::filesystem::path& file);
 /// (the model's own [[effect]] blocks, described), agreement and MAC before and after, the
 /// diagnosed rank 1 (kind, target, probability). A history that cannot be read is started anew.
 nlohmann::json AppendRunHistory(const std::filesystem::path& out_dir, const RunRecord& record);
-
-/// Where rank 1's effects act on the model: [{"target", "kind", "label", "points": [[x,y,z], ...]}]
-/// (spring targets: both ends of every spring of the group or member; points: the test points;
-/// bodies: the centre). Empty when the model cannot be read or rank 1 is "none".
-nlohmann::json DiagnosedPlaces(const std::filesystem::path& model_file, const nlohmann::json& diagnosis);
-/// The same on a model already read.
-nlohmann::json DiagnosedPlaces(const model::Model& model, const nlohmann::json& diagnosis);
 
 }  // namespace ema::app

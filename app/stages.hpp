@@ -1,8 +1,9 @@
-// The typed stages of the `ema` commands (COLMAP style): each command is parsing
-// (Parse<Name>Args: the command line → a <Name>Config) and a stage (Run<Name>Stage: the config and
-// typed inputs → a typed result). The stage writes the files its config names, through the one
-// writer of each format, and prints what the command prints to `out`; `ema run` (cmd_run.cpp)
-// chains the stages on the typed results, with every stage's printout kept in OUTDIR/logs/.
+// The edges of the `ema` commands (COLMAP style): each command is parsing (Parse<Name>Args: the
+// command line → a <Name>Config), the typed stage (pipeline/stages.hpp, computing only), and the
+// edge of its result: Write<Name> writes the files the config names through the one writer of each
+// format, Print<Name> says what the command prints, CommandLine(config) is the command line that
+// runs it. Run<Name>Stage is the three in a row. `ema run` (pipeline::Run) calls the same stages
+// and app/run_outputs.cpp the same Write/Print functions on its RunResult.
 #pragma once
 
 #include <iosfwd>
@@ -12,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "ema/core/text.hpp"
 #include "ema/core/types.hpp"
 #include "ema/correlation/amplitude.hpp"
 #include "ema/correlation/correlate.hpp"
@@ -25,8 +27,14 @@
 #include "ema/model/model.hpp"
 #include "ema/model/solve.hpp"
 #include "ema/planning/plan.hpp"
+#include "ema/pipeline/stages.hpp"
 
 namespace ema::app {
+
+using ema::ExactNumberText;  // core/text.hpp
+
+/// `text` as one shell word (single-quoted when it holds anything but [A-Za-z0-9_./:=,+-]).
+std::string ShellWord(const std::string& text);
 
 // ---- ema frf ----
 
@@ -40,15 +48,16 @@ struct FrfConfig {
   std::vector<double> force_bin_edges;  ///< or bins between these peak forces, N
 };
 
-struct FrfStageResult {
-  frf::FrfResult result;             ///< FRFs and summary (empty for force bins)
-  nlohmann::json summary_json;       ///< what --json holds
-  FrfSet stored;                     ///< what the FRF file holds (formats::StoredFrfSet)
-};
-
 /// nullopt when --help was given (usage printed). UsageError for a bad command line.
 std::optional<FrfConfig> ParseFrfArgs(const std::vector<std::string>& args);
-FrfStageResult RunFrfStage(const FrfConfig& config, std::ostream& out);
+/// `ema frf`: pipeline::EstimateFrfs, then WriteFrf and PrintFrf (force bins: their own files;
+/// the result is then empty).
+pipeline::FrfStage RunFrfStage(const FrfConfig& config, std::ostream& out);
+/// The FRF file and the --json summary the config names.
+void WriteFrf(const FrfConfig& config, const pipeline::FrfStage& stage);
+void PrintFrf(const pipeline::FrfStage& stage, std::ostream& out);
+/// The command line that runs this config (`ema frf ...`, without "ema ").
+std::string CommandLine(const FrfConfig& config);
 
 // ---- ema fit ----
 
@@ -59,20 +68,22 @@ struct FitConfig {
   curvefit::FitOptions options;
 };
 
-struct FitStageResult {
-  curvefit::FitResult fit;           ///< modes (source = the FRF file), diagram, modal model
-  nlohmann::json modes_json;         ///< `ema fit --json`
-  nlohmann::json stabilisation_json; ///< `ema fit --stabilisation` (with CMIF/MMIF)
-  ModeSet stored_modes;              ///< what the modes file holds (formats::StoredModeSet)
-  curvefit::RefineMethod refine = curvefit::RefineMethod::kMl;  ///< as configured
-};
-
-/// `require_input` false: only options (the `args` of a project file's [fit]).
-std::optional<FitConfig> ParseFitArgs(const std::vector<std::string>& args, bool require_input = true);
+/// `require_input` false: only options (`ema pick`'s fit options, a project's [fit] args).
+/// `base`: the options the arguments start from (their defaults), e.g. the project's [fit] keys.
+/// `usage`: the usage line of the command whose arguments these are (`ema pick`), for --help and
+/// the messages; "" = `ema fit`'s.
+std::optional<FitConfig> ParseFitArgs(const std::vector<std::string>& args, bool require_input = true,
+                                      const curvefit::FitOptions& base = {}, const std::string& usage = "");
 /// `--select`: "auto" (empty) or F1,F2,... in Hz (UsageError otherwise).
 std::vector<double> ParseSelect(const std::string& select);
-/// Fits `frfs` (read from config.input by the command).
-FitStageResult RunFitStage(const FitConfig& config, const FrfSet& frfs, std::ostream& out);
+/// `ema fit`: pipeline::FitModes of `frfs` (read from config.input by the command), then WriteFit
+/// and PrintFit.
+pipeline::FitStage RunFitStage(const FitConfig& config, const FrfSet& frfs, std::ostream& out);
+/// Writes -o, --json (pipeline::FitModesJson), --stabilisation (pipeline::FitStabilisationJson), --plot.
+void WriteFit(const FitConfig& config, const pipeline::FitStage& stage, const FrfSet& frfs);
+/// The fit's notes and mode table; its warnings go to stderr.
+void PrintFit(const FitConfig& config, const pipeline::FitStage& stage, std::ostream& out);
+std::string CommandLine(const FitConfig& config);
 
 // ---- ema model ----
 
@@ -82,14 +93,13 @@ struct ModelConfig {
   bool binary = false, explain = false;
 };
 
-struct ModelStageResult {
-  model::Solution solution;
-  nlohmann::json json;               ///< `ema model --json`
-};
-
 std::optional<ModelConfig> ParseModelArgs(const std::vector<std::string>& args);
-/// Solves `model` (read from config.model_path by the command); warnings go to stderr.
-ModelStageResult RunModelStage(const ModelConfig& config, const model::Model& model, std::ostream& out);
+/// Solves `model` (read from config.model_path by the command), then WriteModel and PrintModel.
+model::Solution RunModelStage(const ModelConfig& config, const model::Model& model, std::ostream& out);
+void WriteModel(const ModelConfig& config, const model::Model& model, const model::Solution& solution);
+/// The modes; the solver's warnings go to stderr.
+void PrintModel(const ModelConfig& config, const model::Model& model, const model::Solution& solution, std::ostream& out);
+std::string CommandLine(const ModelConfig& config);
 
 // ---- ema correlate ----
 
@@ -99,14 +109,15 @@ struct CorrelateConfig {
   correlation::TableFormat table_format = correlation::TableFormat::kMarkdown;
 };
 
-struct CorrelateStageResult {
-  correlation::CorrelationResult result;
-  nlohmann::json json;               ///< `ema correlate --json`
-};
-
 std::optional<CorrelateConfig> ParseCorrelateArgs(const std::vector<std::string>& args);
-CorrelateStageResult RunCorrelateStage(const CorrelateConfig& config, const ModeSet& test, const ModeSet& model,
-                                       std::ostream& out);
+correlation::CorrelationResult RunCorrelateStage(const CorrelateConfig& config, const ModeSet& test, const ModeSet& model,
+                                                 std::ostream& out);
+void WriteCorrelation(const CorrelateConfig& config, const correlation::CorrelationResult& result, const ModeSet& test,
+                      const ModeSet& model);
+/// The table; a geometry-unit guess goes to stderr where nodes were paired by distance.
+void PrintCorrelation(const CorrelateConfig& config, const correlation::CorrelationResult& result, const ModeSet& test,
+                      const ModeSet& model, std::ostream& out);
+std::string CommandLine(const CorrelateConfig& config);
 
 // ---- ema diagnose ----
 
@@ -121,17 +132,21 @@ struct DiagnoseConfig {
   bool bundle = false;
 };
 
-struct DiagnoseStageResult {
-  diagnose::Diagnosis diagnosis;
-  nlohmann::json json;               ///< `ema diagnose --json`
-  model::Model updated;              ///< the model with rank 1's effects added (what -o holds)
-  std::string summary;               ///< the first screen: what is missing, how sure, adequacy, look-alikes
-};
-
-/// `require_inputs` false: only options (the `args` of a project file's [diagnose]).
-std::optional<DiagnoseConfig> ParseDiagnoseArgs(const std::vector<std::string>& args, bool require_inputs = true);
-DiagnoseStageResult RunDiagnoseStage(const DiagnoseConfig& config, const model::Model& model,
-                                     const std::vector<diagnose::SetupModes>& tests, std::ostream& out);
+/// `require_inputs` false: only options (the `args` of a project file's [diagnose]). `base`: the
+/// options the arguments start from.
+std::optional<DiagnoseConfig> ParseDiagnoseArgs(const std::vector<std::string>& args, bool require_inputs = true,
+                                                const diagnose::DiagnoseOptions& base = {});
+/// `ema diagnose`: pipeline::DiagnoseModel (with the config's force levels read), then
+/// WriteDiagnosis and PrintDiagnosis.
+pipeline::DiagnoseStage RunDiagnoseStage(const DiagnoseConfig& config, const model::Model& model,
+                                         const std::vector<diagnose::SetupModes>& tests, std::ostream& out);
+/// DIAG.json (pipeline::DiagnosisJson) and the updated model (-o, rank 1's effects added to the file config.model_path).
+void WriteDiagnosis(const DiagnoseConfig& config, const pipeline::DiagnoseStage& stage);
+/// The first screen (DiagnosisSummary), the explanation, the ranking and the before/after table.
+void PrintDiagnosis(const pipeline::DiagnoseStage& stage, std::ostream& out);
+/// The first screen: what is missing, how sure, adequacy, look-alikes, what to check.
+std::string DiagnosisSummary(const pipeline::DiagnoseStage& stage);
+std::string CommandLine(const DiagnoseConfig& config);
 
 // ---- ema quality ----
 
@@ -172,7 +187,7 @@ struct AmplitudeConfig {
 };
 
 std::optional<AmplitudeConfig> ParseAmplitudeArgs(const std::vector<std::string>& args);
-/// Follows the modes over `levels` (app::ReadAmplitudeLevels of config.level_args).
+/// Follows the modes over `levels` (formats::ReadAmplitudeLevels of config.level_args).
 correlation::AmplitudeResult RunAmplitudeStage(const AmplitudeConfig& config,
                                                std::vector<correlation::AmplitudeLevel> levels, std::ostream& out);
 

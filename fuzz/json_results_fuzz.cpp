@@ -7,11 +7,11 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "amplitude_levels.hpp"
+#include "ema/formats/amplitude_json.hpp"
 #include "ema/formats/json_codecs.hpp"
 #include "ema/formats/plan_json.hpp"
+#include "ema/formats/quality_json.hpp"
 #include "json_fuzz_gen.hpp"
-#include "quality_json.hpp"
 
 namespace {
 
@@ -431,7 +431,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       o.coherence_min = g.Double();
       o.coherence_max_low_fraction = g.Double();
       o.scatter_max = g.Double();
-      Check(QualityJson(q, modes, o));
+      Check(formats::QualityJson(q, modes, o));
       break;
     }
     case 12: {  // PLAN.json (`ema plan --json`)
@@ -488,7 +488,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         m.damping_slope_z = g.Double();
         m.reading = g.Text();
       }
-      Check(app::AmplitudeJson(r));
+      Check(formats::AmplitudeJson(r));
       break;
     }
   }

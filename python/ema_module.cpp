@@ -27,8 +27,6 @@
 #include <string>
 #include <vector>
 
-#include "amplitude_levels.hpp"
-#include "cli.hpp"
 #include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/core/error.hpp"
 #include "ema/correlation/correlate.hpp"
@@ -43,14 +41,20 @@
 #include "ema/formats/json_codecs.hpp"
 #include "ema/formats/uff.hpp"
 #include "ema/formats/model_file.hpp"
+#include "ema/formats/modes_sidecar.hpp"
+#include "ema/formats/output_guard.hpp"
 #include "ema/formats/plan_file.hpp"
 #include "ema/formats/plan_json.hpp"
+#include "ema/formats/quality_json.hpp"
 #include "ema/frf/hammer_frf.hpp"
 #include "ema/frf/quality.hpp"
 #include "ema/model/effects.hpp"
 #include "ema/model/solve.hpp"
+#include "ema/formats/project_file.hpp"
+#include "ema/pipeline/json.hpp"
+#include "ema/pipeline/run.hpp"
+#include "ema/pipeline/stages.hpp"
 #include "ema/planning/plan.hpp"
-#include "quality_json.hpp"
 
 #ifndef EMA_VERSION
 #define EMA_VERSION "unknown"
@@ -779,8 +783,8 @@ ema::diagnose::SetupModes ToSetupModes(const std::string& setup, const py::objec
     const std::string path = PathOf(o);
     test.modes = ema::formats::ReadModeSet(path);
     if (test.modes.source.empty()) test.modes.source = path;
-    ema::app::AttachSidecarUncertainty(path, &test.modes);
-    if (sensor_mass > 0.0) ema::app::ReadSidecarTestSets(path, test.modes, &test.roving_sets, &test.reference);
+    ema::formats::AttachSidecarUncertainty(path, &test.modes);
+    if (sensor_mass > 0.0) ema::formats::ReadSidecarTestSets(path, test.modes, &test.roving_sets, &test.reference);
   } else if (IsJsonLayout(o)) {
     test.modes = ModeSetFromJsonLayout(o, label, &test.roving_sets, &test.reference);
   } else if (IsMapping(o)) {
@@ -992,7 +996,7 @@ PYBIND11_MODULE(_ema, m) {
     const std::string out = PathOf(path);
     if (IsPath(input)) {
       try {
-        ema::cli::RefuseOutputsOverInputs({{"input", PathOf(input)}}, {{"path", out}});
+        ema::formats::RefuseOutputsOverInputs({{"input", PathOf(input)}}, {{"path", out}});
       } catch (const ema::UsageError& e) {
         throw ema::UsageError(std::string("path: ") + e.what());
       }
@@ -1498,14 +1502,13 @@ PYBIND11_MODULE(_ema, m) {
           py::gil_scoped_acquire acquire;
           if (PyErr_CheckSignals() != 0) throw py::error_already_set();
         };
-        dg::Diagnosis d;
+        // The stage `ema diagnose` runs, and its JSON: DIAG.json's every key, rank 1's findings included.
+        std::optional<ema::pipeline::DiagnoseStage> stage;
         {
           py::gil_scoped_release release;
-          d = dg::Diagnose(model, sets, opt);
+          stage = ema::pipeline::DiagnoseModel(model, sets, opt);
         }
-        nlohmann::json out = ema::formats::DiagnosisJson(d, opt);
-        if (!d.candidates.empty()) out["modes"] = ema::formats::DiagnosisModeRows(d.baseline, d.candidates.front());
-        return FromJson(out);
+        return FromJson(ema::pipeline::DiagnosisJson(*stage));
       },
       py::arg("model"), py::arg("tests"), py::arg("criterion") = "", py::kw_only(),
       py::arg("max_effects") = defaults.max_effects, py::arg("members") = defaults.members,
@@ -1530,6 +1533,39 @@ PYBIND11_MODULE(_ema, m) {
       "each with kind, target, parameters, uncertainty, probability, mean_abs_frequency_error_pct, mean_mac,\n"
       "score, description, effects, the evidence per test mode), 'baseline', 'effect_probabilities', 'groups',\n"
       "'steps', 'explanation', 'modes' (every test mode before/after rank 1) and the options used.");
+
+  m.def(
+      "run",
+      [](const py::object& project_path, const py::object& output) {
+        ema::formats::Project project = ema::formats::ReadProjectFile(PathOf(project_path));
+        if (!project.fit_extra.empty() || !project.diagnose_extra.empty())
+          throw ema::UsageError(project.file.string() + ": [fit] args / [diagnose] args (the old form of the keys) are "
+                                "read by `ema run` only; give each option as a key (docs/project-file.md)");
+        const ema::pipeline::RunPlan plan = ema::pipeline::PlanFromProject(std::move(project), PathOf(output));
+        // Ctrl-C: at every progress step the run takes the GIL back for a moment and asks Python
+        // whether a signal is pending (as ema.diagnose).
+        const auto progress = [](double, std::string_view) {
+          py::gil_scoped_acquire acquire;
+          if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        };
+        std::optional<ema::pipeline::RunResult> run;
+        {
+          py::gil_scoped_release release;
+          run = ema::pipeline::Run(plan, progress);
+        }
+        return FromJson(ema::pipeline::RunResultJson(*run));
+      },
+      py::arg("project"), py::arg("output") = "ema-run",
+      "The whole story of a project file, as `ema run` computes it: per test frf -> fit -> correlate with the\n"
+      "nominal model, the diagnosis over all tests, the correlation with the updated model. Writes no file.\n\n"
+      "project: a project file (docs/project-file.md; its [fit]/[diagnose] keys, not the old `args`).\n"
+      "output: the folder `ema run -o` would write to; it only names the results' sources (nothing is written).\n\n"
+      "Returns {'project', 'model', 'tests': [{'name', 'setup', 'frf' (`ema frf --json`, None when the project\n"
+      "gives FRFs), 'modes' (`ema fit --json`), 'select_hz', 'picked_by_hand', 'correlation_before',\n"
+      "'correlation_after' (`ema correlate --json`)}], 'diagnosis' (DIAG.json, as ema.diagnose), 'steps':\n"
+      "[{'step', 'test', 'status' ('done', 'failed', 'skipped', 'given'), 'error'}], 'problems',\n"
+      "'mean_agreement_pct_before', 'mean_mac_before', 'mean_agreement_pct_after', 'mean_mac_after'}; None where\n"
+      "a stage gave nothing (a failed step is in 'steps' with its error, as `ema run` reports it).");
 
   const ema::planning::PlanOptions plan_defaults;
   m.def(
@@ -1567,8 +1603,8 @@ PYBIND11_MODULE(_ema, m) {
         const std::string output_path = PathOrNone(output, "output", "the plan file to write (TOML)");
         if (!output_path.empty()) {
           try {
-            ema::cli::RefuseOutputsOverInputs({{"model", model_path}, {"candidates", candidates_path}, {"keep", keep_path}},
-                                              {{"output", output_path}});
+            ema::formats::RefuseOutputsOverInputs({{"model", model_path}, {"candidates", candidates_path}, {"keep", keep_path}},
+                                                  {{"output", output_path}});
           } catch (const ema::UsageError& e) {
             throw ema::UsageError(std::string("output: ") + e.what());
           }
@@ -1658,7 +1694,7 @@ PYBIND11_MODULE(_ema, m) {
         const auto report = ema::frf::CheckFrfQuality(sets, q, names);
         std::vector<ema::curvefit::ModeComplexityCheck> mc;
         if (!modes.is_none()) mc = ema::curvefit::CheckModeComplexity(ToModeSet(modes));
-        return FromJson(ema::QualityJson(report, mc, q));
+        return FromJson(ema::formats::QualityJson(report, mc, q));
       },
       py::arg("frfs"), py::arg("modes") = py::none(), py::arg("band") = py::none(),
       "Data-quality checks as `ema quality` (one FRF path/dict or a list of them, e.g. roving hammer and\n"

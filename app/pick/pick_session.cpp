@@ -13,7 +13,7 @@
 #include "ema/core/error.hpp"
 #include "ema/correlation/mac.hpp"
 #include "ema/curvefit/stabilisation.hpp"
-#include "mode_indicators_json.hpp"
+#include "ema/formats/mode_indicators_json.hpp"
 
 namespace ema::app {
 
@@ -88,22 +88,6 @@ bool IsDrivingPoint(const Dof& response, const Dof& reference) {
 
 }  // namespace
 
-std::string ExactNumberText(double value) {
-  char text[64];
-  const auto result = std::to_chars(text, text + sizeof text, value);  // shortest round trip
-  return std::string(text, result.ptr);
-}
-
-std::string ShellWord(const std::string& text) {
-  const bool plain = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || std::string_view("_./:=,+-").find(c) != std::string_view::npos;
-  });
-  if (plain) return text;
-  std::string quoted = "'";
-  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
-
 PickSession::PickSession(FitConfig config, FrfSet frfs, PickOptions options)
     : config_(std::move(config)), frfs_(std::move(frfs)), options_(options) {
   if (config_.options.method != curvefit::FitMethod::kPolymax)
@@ -113,9 +97,8 @@ PickSession::PickSession(FitConfig config, FrfSet frfs, PickOptions options)
     pick_ = FitPick(first.empty(), first);
   } catch (const InputError& e) {
     // As RunFitStage: the message names the FRF file.
-    const std::string what = e.what();
-    if (what.rfind(config_.input, 0) == 0) throw;
-    throw InputError(config_.input, what);
+    if (e.Where().rfind(config_.input, 0) == 0) throw;  // already placed in the FRFs (a record, a line)
+    throw InputError(config_.input, e.what());
   }
   diagram_ = pick_.fit->diagram;
   for (const auto& w : pick_.fit->warnings) std::cerr << "warning: " << w << "\n";
@@ -223,7 +206,7 @@ json PickSession::DataJson() const {
   }
   try {  // CMIF: the first two singular values (a close mode the sum hides shows in the second)
     json mi;
-    AddModeIndicatorsJson(&mi, frfs_, config_.options.data, config_.input);
+    formats::AddModeIndicatorsJson(&mi, frfs_, config_.options.data, config_.input);
     indicator["cmif_frequency_hz"] = json::array();
     for (const json& f : mi["cmif"]["frequency_hz"]) indicator["cmif_frequency_hz"].push_back(Rounded(f.get<double>()));
     indicator["cmif"] = json::array();
@@ -362,6 +345,13 @@ std::string PickSession::SelectText() const {
   return SelectTextLocked();
 }
 
+std::optional<std::vector<double>> PickSession::Selection() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (pick_.automatic) return std::vector<double>();
+  if (pick_.requested_hz.empty()) return std::nullopt;
+  return pick_.requested_hz;
+}
+
 std::string PickSession::SelectTextLocked() const {
   if (pick_.automatic) return "auto";
   std::string list;
@@ -373,26 +363,10 @@ std::string PickSession::SelectTextLocked() const {
 }
 
 std::string PickSession::EquivalentCommandLocked() const {
-  // Every option ParseFitArgs sets that differs from its default, in `ema fit`'s own spelling.
-  const curvefit::FitOptions& o = config_.options;
-  const curvefit::FitOptions defaults;
-  std::string command = "ema fit " + ShellWord(config_.input);
-  if (o.data.band_lo_hz != defaults.data.band_lo_hz || o.data.band_hi_hz != defaults.data.band_hi_hz)
-    command += " --band " + ExactNumberText(o.data.band_lo_hz) + ":" + ExactNumberText(o.data.band_hi_hz);
-  if (o.polymax.order_max != defaults.polymax.order_max) command += " --order-max " + std::to_string(o.polymax.order_max);
-  if (o.refine != defaults.refine) command += " --refine none";
-  if (o.stability.frequency_tol != defaults.stability.frequency_tol)
-    command += " --freq-tol " + ExactNumberText(o.stability.frequency_tol);
-  if (o.stability.damping_tol != defaults.stability.damping_tol)
-    command += " --damping-tol " + ExactNumberText(o.stability.damping_tol);
-  if (o.stability.mac_min != defaults.stability.mac_min) command += " --mac-min " + ExactNumberText(o.stability.mac_min);
-  if (o.polymax.threads != defaults.polymax.threads) command += " --threads " + std::to_string(o.polymax.threads);
-  if (!pick_.automatic && !pick_.requested_hz.empty()) command += " --select " + SelectTextLocked();
-  command += " -o " + (config_.output.empty() ? std::string("MODES.unv") : ShellWord(config_.output));
-  if (!config_.json_path.empty()) command += " --json " + ShellWord(config_.json_path);
-  if (!config_.stabilisation_path.empty()) command += " --stabilisation " + ShellWord(config_.stabilisation_path);
-  if (!config_.plot_path.empty()) command += " --plot " + ShellWord(config_.plot_path);
-  return command;
+  FitConfig config = config_;
+  config.options.select_frequencies_hz = pick_.automatic ? std::vector<double>() : pick_.requested_hz;
+  if (config.output.empty()) config.output = "MODES.unv";
+  return "ema " + CommandLine(config);
 }
 
 json PickSession::Save(std::ostream& out) {

@@ -90,6 +90,8 @@ class PickSession {
   /// The current pick as `ema fit --select` takes it: "auto" for the automatic selection, else
   /// F1,F2,... (the exact doubles); "" when nothing is picked.
   std::string SelectText() const;
+  /// The same as numbers: empty for the automatic selection, nullopt when nothing is picked.
+  std::optional<std::vector<double>> Selection() const;
 
   /// The first fit's summary lines, as `ema pick` prints them before serving.
   std::string Summary() const;
@@ -116,11 +118,5 @@ class PickSession {
   Pick pick_;
   int saves_ = 0;
 };
-
-/// The shortest decimal text of `value` that reads back (strtod) as the same double.
-std::string ExactNumberText(double value);
-
-/// `text` as one shell word (single-quoted when it holds anything but [A-Za-z0-9_./:=,+-]).
-std::string ShellWord(const std::string& text);
 
 }  // namespace ema::app

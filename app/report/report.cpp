@@ -8,7 +8,10 @@
 
 #include "ema/core/text.hpp"
 #include "ema/formats/json_codecs.hpp"
+#include "ema/formats/quality_json.hpp"
+#include "ema/pipeline/json.hpp"
 #include "embedded_assets.hpp"
+#include "words.hpp"
 #include "report_quality.hpp"
 
 namespace ema::report {
@@ -213,11 +216,10 @@ std::string ScriptSafe(std::string text) {
 
 json BuildReportData(const ReportInput& input) {
   json data = {{"title", input.title}, {"subtitle", input.subtitle}};
-  data["summary"] = input.summary;
   data["files"] = input.steps;
   data["problems"] = input.problems;
-  data["diagnosis"] = input.diagnosis.is_null() ? json::object() : input.diagnosis;
-  data["diagnosis_view"] = DiagnosisView(input.diagnosis);
+  data["diagnosis"] = input.diagnosis ? pipeline::DiagnosisJson(*input.diagnosis) : json::object();
+  data["diagnosis_view"] = input.diagnosis ? DiagnosisView(*input.diagnosis) : json::object();
   if (!input.amplitude.is_null()) data["amplitude"] = input.amplitude;
   data["diagnosed_places"] = input.diagnosed_places.is_null() ? json::array() : input.diagnosed_places;
   data["history"] = input.history.is_null() ? json::array() : input.history;
@@ -272,6 +274,59 @@ json BuildReportData(const ReportInput& input) {
   data["setups"] = std::move(setups);
   return data;
 }
+
+ReportInput ReportInputOf(const pipeline::RunResult& run, const RunPage& page) {
+  const formats::Project& project = run.plan.project;
+  ReportInput input;
+  input.title = project.title;
+  input.subtitle = page.subtitle;
+  input.steps = page.files;
+  input.history = page.history;
+  input.problems = page.problems;
+  input.diagnosis = run.diagnosis;
+  input.diagnosed_places = run.diagnosis && run.nominal
+                               ? DiagnosedPlaces(*run.nominal, run.diagnosis->diagnosis.candidates.front().effects)
+                               : json::array();
+  // Test points of the model's [[point]] entries given by position (points given by FE node have
+  // none), for the animated shapes.
+  std::vector<Node> geometry;
+  if (run.nominal)
+    for (const model::TestPoint& p : run.nominal->points)
+      if (!p.where.IsNode() && p.where.has_at) geometry.push_back(Node{p.id, p.where.at});
+  for (std::size_t t = 0; t < project.tests.size(); ++t) {
+    const formats::ProjectTest& test = project.tests[t];
+    const pipeline::TestResult& r = run.tests[t];
+    SetupResults s;
+    s.name = test.name;
+    if (r.frf) s.frf_summary = formats::FrfSummaryJson(r.frf->result);
+    if (r.fit && r.frfs) {
+      s.stabilisation = pipeline::FitStabilisationJson(*r.fit, *r.frfs, run.plan.project.tests[t].frf
+                                                                          ? run.plan.project.tests[t].frf->string()
+                                                                          : (run.plan.output_dir / test.name / "frf.unv").string());
+      s.fit = r.fit->fit;
+      s.refine = r.fit->options.refine;
+      s.selection = {{"select", SelectText(r.fit->options.select_frequencies_hz)},
+                     {"by_hand", r.picked_by_hand},
+                     {"rule", r.fit->fit.selection_rule},
+                     {"command", t < page.fit_commands.size() ? page.fit_commands[t] : std::string()},
+                     {"modes_json", (std::filesystem::path(test.name) / "modes.json").generic_string()}};
+      if (r.correlation_before && r.model_before)
+        s.correlation_before = CorrelationView{*r.correlation_before, r.fit->stored_modes, r.model_before->modes};
+      if (r.correlation_after && r.model_after)
+        s.correlation_after = CorrelationView{*r.correlation_after, r.fit->stored_modes, r.model_after->modes};
+    }
+    s.geometry = geometry;
+    s.lines = project.lines;
+    s.band_lo_hz = project.fit.data.band_lo_hz;
+    s.band_hi_hz = project.fit.data.band_hi_hz;
+    if (r.frfs) s.frfs = r.frfs;
+    if (r.quality) s.quality = formats::QualityJson(*r.quality, {}, r.quality_options);
+    input.setups.push_back(std::move(s));
+  }
+  return input;
+}
+
+std::string RenderHtml(const pipeline::RunResult& run, const RunPage& page) { return RenderHtml(ReportInputOf(run, page)); }
 
 std::string RenderHtml(const ReportInput& input) {
   const std::string data = ScriptSafe(BuildReportData(input).dump());

@@ -1,10 +1,12 @@
 // The self-contained HTML report of `ema run`: one file with every chart (plotly.js embedded), the
 // data it draws embedded as JSON, and no network access when opened.
 //
-// The inputs are the typed results of the pipeline's stages (the measured FRFs, the fit with its
-// own modal model, the model modes, the correlations, the diagnosis as `ema diagnose --json`), so
-// the report shows exactly what the stages produced and computes nothing of its own: the MAC is
-// the correlation's, the fit curve is the fit's modal model (curvefit::SynthesiseMeasuredFrf).
+// The input is the run's typed result (pipeline::RunResult: the measured FRFs, the fit with its
+// own modal model, the model modes, the correlations, the diagnosis and its findings), so the
+// report shows exactly what the stages produced and computes nothing of its own: the MAC is the
+// correlation's, the fit curve is the fit's modal model (curvefit::SynthesiseMeasuredFrf), the
+// first screen words the diagnosis's findings (pipeline::Findings). No text the program wrote is
+// read back, and the terminal's summary is not part of the page.
 #pragma once
 
 #include <Eigen/Core>
@@ -19,6 +21,7 @@
 #include "ema/core/types.hpp"
 #include "ema/correlation/correlate.hpp"
 #include "ema/curvefit/fit.hpp"
+#include "ema/pipeline/run.hpp"
 
 namespace ema::report {
 
@@ -55,19 +58,37 @@ struct SetupResults {
 struct ReportInput {
   std::string title = "ema report";
   std::string subtitle;                ///< e.g. the project file and the date
-  std::vector<std::string> summary;    ///< the run's one-screen summary, one line each
   std::vector<std::string> steps;      ///< the files each step wrote, for the "files" list
   std::vector<SetupResults> setups;
-  nlohmann::json diagnosis;            ///< `ema diagnose --json`
+  /// The diagnosis (pipeline::DiagnoseStage): DIAG.json's data and the first screen. Empty: none.
+  std::optional<pipeline::DiagnoseStage> diagnosis;
   /// `ema amplitude --json` (cli.md) when the test was run at several force levels: the report
   /// then plots frequency and damping against level per mode. Null: no such section.
   nlohmann::json amplitude;
-  /// Where rank 1's effects act (app::DiagnosedPlaces): drawn over the test geometry.
+  /// Where rank 1's effects act (DiagnosedPlaces): drawn over the test geometry.
   nlohmann::json diagnosed_places;
   /// OUTDIR/history.json (app::AppendRunHistory): the model versions of successive runs.
   nlohmann::json history;
   std::vector<std::string> problems;   ///< steps that failed or were skipped, shown in the page
 };
+
+/// What the page of a run shows beside its result: facts of the output folder.
+struct RunPage {
+  std::string subtitle;                ///< e.g. the project file, the model and the date
+  std::vector<std::string> files;      ///< the files the run wrote, relative to OUTDIR
+  nlohmann::json history;              ///< OUTDIR/history.json after this run
+  std::vector<std::string> fit_commands;  ///< per test: the equivalent `ema fit` line ("" when none)
+  std::vector<std::string> problems;   ///< the run's problems in words (app::RunProblems)
+};
+
+/// The report of a run: everything from `run` and the page's facts.
+ReportInput ReportInputOf(const pipeline::RunResult& run, const RunPage& page);
+std::string RenderHtml(const pipeline::RunResult& run, const RunPage& page);
+
+/// Where `effects` (rank 1's) act on the model: [{"target", "kind", "label", "points": [[x,y,z], ...]}]
+/// (spring targets: both ends of every spring of the group or member; points: the test points;
+/// bodies: the centre; FE parts: none).
+nlohmann::json DiagnosedPlaces(const model::Model& model, const std::vector<model::Effect>& effects);
 
 /// The complete page. Deterministic for a given input (no timestamps added here).
 std::string RenderHtml(const ReportInput& input);
@@ -86,27 +107,16 @@ struct StabilisationPoints {
 };
 StabilisationPoints ReadStabilisation(const nlohmann::json& stabilisation);
 
-/// The diagnosis (`ema diagnose --json`) as the page shows it; nothing is re-computed, only read,
+/// The diagnosis as the page shows it; nothing is re-computed, only read from the typed result,
 /// folded and put into words:
-///  - "story": the first screen — rank 1's effects, each with its summed probability over the
-///    candidates that hold it ("effect_probabilities"; "any": the same effect on any member or point
-///    of a wildcard) and its value ± σ in engineering units (the summary's words where it gives
-///    them); the mean error and MAC before → after; the adequacy to the test's noise in words
-///    ("noise_consistent", "reduced_chi2"); the test modes rank 1 still misses ("failing_modes");
-///    the look-alike readings, one line per group ("groups", the summary's factor-20 rule); rank 1's
-///    flags ("checks").
+///  - "story": the first screen — rank 1's effects (pipeline::Findings: each with its summed
+///    probability, "any": the same effect on any member or point, and its values in engineering
+///    units), the mean error and MAC before → after, the adequacy to the test's noise in words,
+///    the model's own error where it dominates, the test modes rank 1 still misses
+///    ("failing_modes"), the look-alike readings (Findings::lookalikes) and rank 1's flags.
 ///  - "groups": the candidates with look-alikes folded — one row per group (its best member's
-///    values, "more" members, the group's summed probability), the other members under "members";
-///    a candidate no group holds is a row of its own.
-///  - "modes": per test mode of each setup, the frequency and shape misfit in σ and the MAC as given
-///    and with rank 1, the mode's share of the fall in χ² ("share_pct") and a verdict ("within
-///    noise", "marginal" > 2σ, "misfit" > 3σ, "unpaired").
-/// Empty object: no diagnosis.
-nlohmann::json DiagnosisView(const nlohmann::json& diagnosis);
-
-/// A fitted parameter in engineering units with its 1σ: "E' = 168 ± 0.37 GPa (R' = 1 mm)",
-/// "k = 2.8 ± 0.1 N/µm", "m = 10.9 ± 2.6 g", "stiffness × 0.31 ± 0.02". NaN sigma: no "±".
-std::string ParameterText(const std::string& kind, const std::string& name, double value, double sigma,
-                          double radius_m = std::numeric_limits<double>::quiet_NaN());
+///    values, "more" members, the group's summed probability), the other members under "members".
+///  - "modes": per test mode of each setup, the evidence (Findings::modes) with its verdict.
+nlohmann::json DiagnosisView(const pipeline::DiagnoseStage& diagnosis);
 
 }  // namespace ema::report

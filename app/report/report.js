@@ -125,7 +125,7 @@
     return (v / Math.pow(10, e)).toFixed(1) + 'e' + e;
   }
   var hasDiagnosis = !!(story && diag.candidates && diag.candidates.length);
-  if (hasDiagnosis || (data.setups || []).length || (data.summary || []).length) {
+  if (hasDiagnosis || (data.setups || []).length) {
     var fs0 = el('section', { 'class': 'card first-screen', id: 'first-screen' });
     main.appendChild(fs0);
     if ((data.setups || []).length) {
@@ -191,10 +191,6 @@
           return el('li', null, [el('strong', { text: 'Check: ' }), String(c) + '.']);
         })));
       }
-    }
-    if (data.summary && data.summary.length) {
-      fs0.appendChild(el('details', { 'class': 'summary-text' }, [el('summary', { text: 'The run\'s summary as text (summary.txt)' }),
-        el('pre', { 'class': 'summary', text: data.summary.join('\n') })]));
     }
     if (data.problems && data.problems.length) {
       fs0.appendChild(el('p', { 'class': 'missing', text: 'Steps that did not complete:' }));

@@ -178,16 +178,7 @@ json RefinementJson(const curvefit::FitResult& fit, curvefit::RefineMethod metho
 
 json TestSetsJson(const FrfSet& frfs) {
   json out = json::object();
-  if (!frfs.output_sets.empty() && frfs.output_sets.size() == frfs.outputs.size()) {
-    std::map<int, std::vector<int>> sets;
-    for (std::size_t o = 0; o < frfs.outputs.size(); ++o) {
-      std::vector<int>& nodes = sets[frfs.output_sets[o]];
-      if (std::find(nodes.begin(), nodes.end(), frfs.outputs[o].node) == nodes.end()) nodes.push_back(frfs.outputs[o].node);
-    }
-    json list = json::array();
-    for (const auto& [id, nodes] : sets) list.push_back(nodes);
-    out["roving_sets"] = list;
-  }
+  if (!frfs.output_sets.empty() && frfs.output_sets.size() == frfs.outputs.size()) out["roving_sets"] = frfs.RovingSetNodes();
   if (frfs.references.size() == 1)
     out["reference"] = {{"node", frfs.references[0].node}, {"dir", DirectionName(frfs.references[0].direction)}};
   return out;

@@ -1,8 +1,11 @@
 #include "ema/formats/project_file.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <toml++/toml.h>
 
 #include "ema/core/error.hpp"
@@ -26,11 +29,6 @@ std::string String(const fs::path& file, const toml::node& node, const std::stri
   throw InputError(Where(file, node), "'" + key + "' must be a string");
 }
 
-double Number(const fs::path& file, const toml::node& node, const std::string& key) {
-  if (auto v = node.value<double>()) return *v;
-  throw InputError(Where(file, node), "'" + key + "' must be a number");
-}
-
 fs::path Resolve(const fs::path& file, const std::string& relative) {
   const fs::path p(relative);
   return fs::absolute(p.is_absolute() ? p : file.parent_path() / p).lexically_normal();
@@ -52,13 +50,14 @@ std::vector<std::string> Strings(const fs::path& file, const toml::node& node, c
   throw InputError(Where(file, node), "'" + key + "' must be an array of strings");
 }
 
-// A selection as `ema fit --select` takes it: "auto" or positive frequencies in Hz, comma-separated.
-std::string Selection(const fs::path& file, const toml::node& node) {
+// A selection as `ema fit --select` takes it: "auto" (an empty list) or positive frequencies in Hz,
+// comma-separated.
+std::vector<double> Selection(const fs::path& file, const toml::node& node) {
   const std::string text = String(file, node, "select");
-  if (text == "auto") return text;
+  std::vector<double> hz;
+  if (text == "auto") return hz;
   std::stringstream items(text);
   std::string item;
-  int count = 0;
   while (std::getline(items, item, ',')) {
     size_t used = 0;
     double f = 0.0;
@@ -70,10 +69,247 @@ std::string Selection(const fs::path& file, const toml::node& node) {
     if (used == 0 || used != item.size() || !(f > 0.0) || !std::isfinite(f))
       throw InputError(Where(file, node), "'select' must be \"auto\" or positive frequencies in Hz, comma-separated "
                                           "(\"196.4,266.7\"); got '" + item + "'");
-    ++count;
+    hz.push_back(f);
   }
-  if (count == 0) throw InputError(Where(file, node), "'select' must be \"auto\" or F1,F2,... in Hz");
-  return text;
+  if (hz.empty()) throw InputError(Where(file, node), "'select' must be \"auto\" or F1,F2,... in Hz");
+  return hz;
+}
+
+// ---- The typed options of [frf], [fit] and [diagnose] -----------------------------------------
+
+// One key's value in an options table, with the messages of its line: "file:line: [fit] key: what".
+class KeyValue {
+ public:
+  KeyValue(const fs::path& file, const std::string& table, const char* key, const toml::node& node)
+      : file_(file), table_(table), key_(key), node_(node) {}
+
+  const fs::path& file() const { return file_; }
+  const toml::node& node() const { return node_; }
+
+  [[noreturn]] void Fail(const std::string& what) const {
+    throw InputError(Where(file_, node_), table_ + " " + key_ + ": " + what);
+  }
+  double Number() const {
+    const std::optional<double> v = node_.is_number() ? node_.value<double>() : std::nullopt;
+    if (!v || !std::isfinite(*v)) Fail("expected a number");
+    return *v;
+  }
+  int Integer() const {
+    const std::optional<int> v = IntValue(node_);
+    if (!v) Fail("expected an integer");
+    return *v;
+  }
+  bool Bool() const {
+    const toml::value<bool>* v = node_.as_boolean();
+    if (!v) Fail("expected true or false");
+    return v->get();
+  }
+  std::string Text() const {
+    const toml::value<std::string>* v = node_.as_string();
+    if (!v) Fail("expected a string");
+    return v->get();
+  }
+  /// One name of the option's name table (`ema <command> --option` takes the same names).
+  template <class Enum, std::size_t N>
+  Enum Choice(const EnumName<Enum> (&names)[N]) const {
+    Enum value{};
+    const std::string text = node_.is_string() ? Text() : std::string();
+    if (!node_.is_string() || !FromName(names, text, &value))
+      Fail("expected " + NameList(names) + (node_.is_string() ? ", got '" + text + "'" : std::string()));
+    return value;
+  }
+  /// [low_hz, high_hz] with 0 <= low < high (`--band LO:HI`).
+  std::pair<double, double> Band() const {
+    const toml::array* a = node_.as_array();
+    if (!a || a->size() != 2 || !a->get(0)->is_number() || !a->get(1)->is_number())
+      Fail("expected [low_hz, high_hz]");
+    const double lo = a->get(0)->value<double>().value_or(kNaN), hi = a->get(1)->value<double>().value_or(kNaN);
+    if (!(std::isfinite(lo) && std::isfinite(hi) && lo >= 0.0 && hi > lo)) Fail("expected [low_hz, high_hz] with 0 <= low < high");
+    return {lo, hi};
+  }
+
+ private:
+  const fs::path& file_;
+  const std::string& table_;
+  std::string key_;
+  const toml::node& node_;
+};
+
+// One key of an options table: the TOML form of one command-line option of the subcommand
+// (`options`: that option's name, and any other option that sets the same field) and how its
+// value is read into the subcommand's options struct.
+template <class Options>
+struct OptionKey {
+  const char* key;
+  std::vector<std::string> options;
+  std::function<void(const KeyValue&, Options&)> read;
+};
+
+// Keys whose value goes into one field: `field(options)` is that field.
+template <class Options, class Field>
+OptionKey<Options> NumberKey(const char* key, std::string option, Field field) {
+  return {key, {std::move(option)}, [field](const KeyValue& v, Options& o) { field(o) = v.Number(); }};
+}
+template <class Options, class Field>
+OptionKey<Options> IntegerKey(const char* key, std::string option, Field field) {
+  return {key, {std::move(option)}, [field](const KeyValue& v, Options& o) { field(o) = v.Integer(); }};
+}
+template <class Options, class Field, class Enum, std::size_t N>
+OptionKey<Options> ChoiceKey(const char* key, std::string option, const EnumName<Enum> (&names)[N], Field field) {
+  return {key, {std::move(option)}, [field, &names](const KeyValue& v, Options& o) { field(o) = v.Choice(names); }};
+}
+
+// `ema frf` (app/cmd_frf.cpp ParseFrfArgs). Not here: the inputs and outputs, --binary ([output]
+// binary), --force-bins / --force-bin-edges (one FRF file per test in `ema run`).
+const std::vector<OptionKey<frf::FrfOptions>>& FrfKeys() {
+  using O = frf::FrfOptions;
+  static const std::vector<OptionKey<O>> keys = {
+      {"estimator", {"estimator"},
+       [](const KeyValue& v, O& o) {
+         try {
+           o.estimator = frf::ParseEstimator(v.Text());
+         } catch (const std::invalid_argument& e) {
+           v.Fail(e.what());
+         }
+       }},
+      {"band", {"band"}, [](const KeyValue& v, O& o) { std::tie(o.band_lo_hz, o.band_hi_hz) = v.Band(); }},
+      {"exp_window", {"exp-window"},
+       [](const KeyValue& v, O& o) {
+         // A mode's name (frf::kExpWindowNames), else a fixed decay rate in 1/s, as --exp-window.
+         acquisition::ImpactOptions& imp = o.impact;
+         if (v.node().is_number()) {
+           imp.exp_window = acquisition::ExpWindowMode::kFixed;
+           imp.exp_decay_rate = v.Number();
+         } else if (!v.node().is_string() || !FromName(frf::kExpWindowNames, v.Text(), &imp.exp_window)) {
+           v.Fail("expected \"auto\", \"none\" or a decay rate 1/tau in 1/s");
+         }
+       }},
+      NumberKey<O>("exp_end_level", "exp-end-level", [](auto& o) -> auto& { return o.impact.exp_end_level; }),
+      ChoiceKey<O>("quantity", "quantity", frf::kOutputQuantityNames, [](auto& o) -> auto& { return o.output_quantity; }),
+      NumberKey<O>("trigger_level", "trigger-level", [](auto& o) -> auto& { return o.impact.trigger_level; }),
+      NumberKey<O>("force_window", "force-window", [](auto& o) -> auto& { return o.impact.force_window_pulses; }),
+      {"double_hit_ratio", {"double-hit-ratio"},
+       [](const KeyValue& v, O& o) {
+         o.impact.double_hit_high = v.Number();
+         o.impact.double_hit_low = std::min(o.impact.double_hit_low, 0.5 * o.impact.double_hit_high);  // as ParseFrfArgs
+       }},
+      NumberKey<O>("double_hit_autocorrelation", "double-hit-autocorrelation",
+                   [](auto& o) -> auto& { return o.impact.double_hit_autocorrelation; }),
+      {"accept_double_hits", {"accept-double-hits"}, [](const KeyValue& v, O& o) { o.impact.reject_double_hits = !v.Bool(); }},
+      NumberKey<O>("overload_fraction", "overload-fraction", [](auto& o) -> auto& { return o.impact.overload_fraction; }),
+      NumberKey<O>("level_tolerance", "level-tolerance", [](auto& o) -> auto& { return o.impact.level_tolerance; }),
+      IntegerKey<O>("threads", "threads", [](auto& o) -> auto& { return o.threads; }),
+  };
+  return keys;
+}
+
+// `ema fit` (app/cmd_fit.cpp ParseFitArgs). Not here: the input and the outputs (--json,
+// --stabilisation, --plot), which `ema run` names.
+const std::vector<OptionKey<curvefit::FitOptions>>& FitKeys() {
+  using O = curvefit::FitOptions;
+  static const std::vector<OptionKey<O>> keys = {
+      {"band", {"band"}, [](const KeyValue& v, O& o) { std::tie(o.data.band_lo_hz, o.data.band_hi_hz) = v.Band(); }},
+      {"order_max", {"order-max"},
+       [](const KeyValue& v, O& o) {
+         const std::optional<int> order = IntValue(v.node());
+         if (!order || *order < 1) v.Fail("expected a positive integer (the highest PolyMAX order)");
+         o.polymax.order_max = *order;
+       }},
+      {"select", {"select"}, [](const KeyValue& v, O& o) { o.select_frequencies_hz = Selection(v.file(), v.node()); }},
+      ChoiceKey<O>("method", "method", curvefit::kFitMethodNames, [](auto& o) -> auto& { return o.method; }),
+      ChoiceKey<O>("refine", "refine", curvefit::kRefineMethodNames, [](auto& o) -> auto& { return o.refine; }),
+      NumberKey<O>("freq_tol", "freq-tol", [](auto& o) -> auto& { return o.stability.frequency_tol; }),
+      NumberKey<O>("damping_tol", "damping-tol", [](auto& o) -> auto& { return o.stability.damping_tol; }),
+      NumberKey<O>("mac_min", "mac-min", [](auto& o) -> auto& { return o.stability.mac_min; }),
+      IntegerKey<O>("threads", "threads", [](auto& o) -> auto& { return o.polymax.threads; }),
+  };
+  return keys;
+}
+
+// `ema diagnose` (app/cmd_diagnose.cpp ParseDiagnoseArgs). Not here: the model, the tests and the
+// outputs, which `ema run` names; --sensor-mass ([[test]] sensor_mass); --bundle (`ema run
+// --bundle`); --force-level.
+const std::vector<OptionKey<diagnose::DiagnoseOptions>>& DiagnoseKeys() {
+  using O = diagnose::DiagnoseOptions;
+  static const std::vector<OptionKey<O>> keys = {
+      ChoiceKey<O>("criterion", "criterion", diagnose::kCriterionNames, [](auto& o) -> auto& { return o.criterion; }),
+      {"max_effects", {"max-effects", "no-pairs"}, [](const KeyValue& v, O& o) { o.max_effects = v.Integer(); }},
+      {"pairs", {"no-pairs", "max-effects"},
+       [](const KeyValue& v, O& o) {
+         if (!v.Bool()) o.max_effects = 1;  // --no-pairs; pairs = true leaves max_effects as it is
+       }},
+      {"members", {"no-members"}, [](const KeyValue& v, O& o) { o.members = v.Bool(); }},
+      NumberKey<O>("frequency_floor", "frequency-floor", [](auto& o) -> auto& { return o.frequency_floor; }),
+      {"shape_sigma", {"shape-sigma", "shape-weight"}, [](const KeyValue& v, O& o) { o.shape_sigma = v.Number(); }},
+      {"exact_form", {"exact-form"}, [](const KeyValue& v, O& o) { o.model_error = !v.Bool(); }},
+      NumberKey<O>("effect_prior_odds", "effect-prior-odds", [](auto& o) -> auto& { return o.effect_prior_odds; }),
+      NumberKey<O>("mac_min", "mac-min", [](auto& o) -> auto& { return o.pairing.mac_min; }),
+  };
+  return keys;
+}
+
+template <class Options>
+std::set<std::string> KeyNames(const std::vector<OptionKey<Options>>& keys, bool with_args) {
+  std::set<std::string> names;
+  for (const OptionKey<Options>& k : keys) names.insert(k.key);
+  if (with_args) names.insert("args");
+  return names;
+}
+
+// Reads the keys `table` gives into *options (over what it holds: the struct's defaults) and
+// lists them in *given. `valid` is the struct's own check: run after each key, so that a value
+// out of range is reported at its key's line, and once more over the whole table.
+template <class Options>
+void ReadOptionKeys(const fs::path& file, const toml::table& table, const std::string& name,
+                    const std::vector<OptionKey<Options>>& keys, const std::function<bool(const Options&, std::string*)>& valid,
+                    Options* options, std::vector<std::string>* given) {
+  for (const OptionKey<Options>& k : keys) {
+    const toml::node* node = table.get(k.key);
+    if (!node) continue;
+    const KeyValue value(file, name, k.key, *node);
+    k.read(value, *options);
+    given->push_back(k.key);
+    if (std::string why; !valid(*options, &why)) value.Fail(why);
+  }
+  if (std::string why; !valid(*options, &why)) throw InputError(Where(file, table), name + ": " + why);
+}
+
+// The option of `options` a command-line token sets as Boost's parser reads it (cli::Parse, its
+// default style): --name or --name=value, and a prefix of one name only standing for that name.
+// "" for anything else (a value, a short option, an option no key has). A prefix shared with an
+// option no key has (`ema fit --s`: --select, --stabilisation) counts as the key's option here;
+// the parser would refuse it as ambiguous anyway.
+std::string OptionOfToken(const std::string& token, const std::set<std::string>& options) {
+  if (token.size() < 3 || token.compare(0, 2, "--") != 0) return "";
+  const std::string name = token.substr(2, token.find('=') == std::string::npos ? std::string::npos : token.find('=') - 2);
+  if (name.empty()) return "";
+  if (options.count(name)) return name;
+  std::string match;
+  for (const std::string& option : options) {
+    if (option.compare(0, name.size(), name) != 0) continue;
+    if (!match.empty()) return "";  // ambiguous: the parser refuses it when the run parses args
+    match = option;
+  }
+  return match;
+}
+
+// A key and the same option in the table's args (the old form): refused, naming both.
+template <class Options>
+void RefuseKeysInArgs(const fs::path& file, const toml::table& table, const std::string& name,
+                      const std::vector<OptionKey<Options>>& keys, const std::vector<std::string>& args) {
+  std::set<std::string> all;
+  for (const OptionKey<Options>& k : keys) all.insert(k.options.begin(), k.options.end());
+  for (const std::string& token : args) {
+    const std::string option = OptionOfToken(token, all);
+    if (option.empty()) continue;
+    for (const OptionKey<Options>& k : keys) {
+      const toml::node* node = table.get(k.key);
+      if (!node || std::find(k.options.begin(), k.options.end(), option) == k.options.end()) continue;
+      const std::string written = token.substr(0, token.find('='));
+      throw InputError(Where(file, *node), name + " " + k.key + " and args " + written +
+                                               (written == "--" + option ? "" : " (--" + option + ")") + ": give one");
+    }
+  }
 }
 
 }  // namespace
@@ -133,7 +369,10 @@ Project ReadProjectFile(const fs::path& path) {
                                           "11.2 g accelerometer)");
       test.sensor_mass = *v;
     }
-    if (const toml::node* select = (*t)["select"].node()) test.select = Selection(file, *select);
+    if (const toml::node* select = (*t)["select"].node()) {
+      test.select_hz = Selection(file, *select);
+      test.select = String(file, *select, "select");
+    }
     if (const toml::node* pick = (*t)["pick"].node()) {
       const auto v = pick->value<bool>();
       if (!v) throw InputError(Where(file, *pick), "'pick' must be true or false");
@@ -147,29 +386,38 @@ Project ReadProjectFile(const fs::path& path) {
   }
 
   if (const toml::table* frf = root["frf"].as_table()) {
-    CheckKeys(file, *frf, {"estimator"}, "[frf]");
-    if ((*frf)["estimator"]) project.estimator = String(file, *(*frf)["estimator"].node(), "estimator");
+    CheckKeys(file, *frf, KeyNames(FrfKeys(), false), "[frf]");
+    ReadOptionKeys<frf::FrfOptions>(
+        file, *frf, "[frf]", FrfKeys(), [](const frf::FrfOptions& o, std::string* why) { return o.IsValid(why); },
+        &project.frf, &project.frf_keys);
   }
+  project.estimator = frf::EstimatorName(project.frf.estimator);
   if (const toml::table* fit = root["fit"].as_table()) {
-    CheckKeys(file, *fit, {"band", "order_max", "select", "args"}, "[fit]");
-    if (const toml::node* band = (*fit)["band"].node()) {
-      const toml::array* a = band->as_array();
-      if (!a || a->size() != 2) throw InputError(Where(file, *band), "'band' must be [low_hz, high_hz]");
-      const double lo = Number(file, *a->get(0), "band"), hi = Number(file, *a->get(1), "band");
-      if (!(lo >= 0.0 && hi > lo)) throw InputError(Where(file, *band), "'band' must satisfy 0 <= low < high");
-      project.band_hz = std::make_pair(lo, hi);
-    }
-    if (const toml::node* order = (*fit)["order_max"].node()) {
-      const auto v = IntValue(*order);
-      if (!v || *v < 1) throw InputError(Where(file, *order), "'order_max' must be a positive integer");
-      project.order_max = *v;
-    }
-    if ((*fit)["select"]) project.select = Selection(file, *(*fit)["select"].node());
+    CheckKeys(file, *fit, KeyNames(FitKeys(), true), "[fit]");
+    ReadOptionKeys<curvefit::FitOptions>(
+        file, *fit, "[fit]", FitKeys(), [](const curvefit::FitOptions& o, std::string* why) { return o.IsValid(why); },
+        &project.fit, &project.fit_keys);
+    if (const toml::node* select = (*fit)["select"].node()) project.select = String(file, *select, "select");
+    project.select_hz = project.fit.select_frequencies_hz;
+    if (std::count(project.fit_keys.begin(), project.fit_keys.end(), "band"))
+      project.band_hz = std::make_pair(project.fit.data.band_lo_hz, project.fit.data.band_hi_hz);
+    if (std::count(project.fit_keys.begin(), project.fit_keys.end(), "order_max")) project.order_max = project.fit.polymax.order_max;
     if ((*fit)["args"]) project.fit_extra = Strings(file, *(*fit)["args"].node(), "args");
+    RefuseKeysInArgs(file, *fit, "[fit]", FitKeys(), project.fit_extra);
   }
   if (const toml::table* diagnose = root["diagnose"].as_table()) {
-    CheckKeys(file, *diagnose, {"args"}, "[diagnose]");
+    CheckKeys(file, *diagnose, KeyNames(DiagnoseKeys(), true), "[diagnose]");
+    const toml::node* pairs = (*diagnose)["pairs"].node();
+    const toml::node* max_effects = (*diagnose)["max_effects"].node();
+    if (pairs && max_effects && pairs->value<bool>() == false && IntValue(*max_effects).value_or(1) != 1)
+      throw InputError(Where(file, *pairs), "[diagnose] pairs = false and max_effects = " +
+                                                std::to_string(*IntValue(*max_effects)) + ": give one");
+    ReadOptionKeys<diagnose::DiagnoseOptions>(
+        file, *diagnose, "[diagnose]", DiagnoseKeys(),
+        [](const diagnose::DiagnoseOptions& o, std::string* why) { return o.IsValid(why) && o.pairing.IsValid(why); },
+        &project.diagnose, &project.diagnose_keys);
     if ((*diagnose)["args"]) project.diagnose_extra = Strings(file, *(*diagnose)["args"].node(), "args");
+    RefuseKeysInArgs(file, *diagnose, "[diagnose]", DiagnoseKeys(), project.diagnose_extra);
   }
   project.title = project.name;
   if (const toml::table* report = root["report"].as_table()) {

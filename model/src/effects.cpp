@@ -166,33 +166,11 @@ void ApplyOperatingPoint(Model& model, const Effect& e) {
 
 void ApplyAddedMass(Model& model, const Effect& e) {
   const double m = Param(model, e, "mass", false);
-  std::vector<const TestPoint*> targets;
-  if (e.target == "all_points") {
-    for (const TestPoint& p : model.points) targets.push_back(&p);
-    if (targets.empty()) throw InputError(Where(model, e), "the model has no [[point]]");
-  } else if (e.target.rfind("points:", 0) == 0) {
-    std::stringstream list(e.target.substr(7));
-    std::string item;
-    while (std::getline(list, item, ',')) {
-      int id = 0;
-      try {
-        std::size_t used = 0;
-        id = std::stoi(item, &used);
-        if (item.find_first_not_of(" ", used) != std::string::npos) throw std::invalid_argument(item);
-      } catch (const std::exception&) {
-        throw InputError(Where(model, e), "bad point id '" + item + "' (expected points:101,102)");
-      }
-      const TestPoint* found = nullptr;
-      for (const TestPoint& p : model.points)
-        if (p.id == id) found = &p;
-      if (!found) throw InputError(Where(model, e), "no test point " + std::to_string(id));
-      targets.push_back(found);
-    }
-  } else {
-    throw InputError(Where(model, e), "target must be 'all_points' or 'points:101,102'");
-  }
   std::vector<PointMass> added;
-  for (const TestPoint* p : targets) added.push_back({"added_mass@" + std::to_string(p->id), p->where, m, e.line});
+  for (int i : TargetPoints(model, e)) {
+    const TestPoint& p = model.points[static_cast<std::size_t>(i)];
+    added.push_back({"added_mass@" + std::to_string(p.id), p.where, m, e.line});
+  }
   model.masses.insert(model.masses.end(), added.begin(), added.end());
 }
 
@@ -470,6 +448,35 @@ std::vector<Member> Members(const Model& model) {
     for (Member& m : members) out.push_back(std::move(m));
   }
   return out;
+}
+
+std::vector<int> TargetPoints(const Model& model, const Effect& e) {
+  std::vector<int> targets;
+  if (e.target == "all_points") {
+    for (std::size_t i = 0; i < model.points.size(); ++i) targets.push_back(static_cast<int>(i));
+    if (targets.empty()) throw InputError(Where(model, e), "the model has no [[point]]");
+  } else if (e.target.rfind("points:", 0) == 0) {
+    std::stringstream list(e.target.substr(7));
+    std::string item;
+    while (std::getline(list, item, ',')) {
+      int id = 0;
+      try {
+        std::size_t used = 0;
+        id = std::stoi(item, &used);
+        if (item.find_first_not_of(" ", used) != std::string::npos) throw std::invalid_argument(item);
+      } catch (const std::exception&) {
+        throw InputError(Where(model, e), "bad point id '" + item + "' (expected points:101,102)");
+      }
+      int found = -1;
+      for (std::size_t i = 0; i < model.points.size(); ++i)
+        if (model.points[i].id == id) found = static_cast<int>(i);
+      if (found < 0) throw InputError(Where(model, e), "no test point " + std::to_string(id));
+      targets.push_back(found);
+    }
+  } else {
+    throw InputError(Where(model, e), "target must be 'all_points' or 'points:101,102'");
+  }
+  return targets;
 }
 
 std::vector<int> TargetSprings(const Model& model, const std::string& target) {

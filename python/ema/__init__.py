@@ -8,8 +8,8 @@ Install (docs/python.md)::
     v/bin/pip install --no-build-isolation .
 
 Every function has a docstring (``help(ema.diagnose)``) and a type stub (``ema/_ema.pyi``; the result
-layouts as TypedDicts in ``ema.types``). fit, read_modes, model_modes, correlate, diagnose, plan and
-quality return an ``ema.Result``: the binding's dict, unchanged, with ``to_dataframe()``, ``to_json()``
+layouts as TypedDicts in ``ema.types``). fit, read_modes, model_modes, correlate, diagnose, plan,
+run and quality return an ``ema.Result``: the binding's dict, unchanged, with ``to_dataframe()``, ``to_json()``
 and an HTML view in notebooks. ``ema.to_json``/``ema.to_jsonable``/``ema.to_dataframe`` take any result;
 ``ema.plot_stabilisation``, ``ema.plot_frf`` and ``ema.plot_mac`` draw them (matplotlib, imported
 when a plot is made).
@@ -39,6 +39,7 @@ model_modes = returning_result(_ema.model_modes)
 correlate = returning_result(_ema.correlate)
 diagnose = returning_result(_ema.diagnose)
 plan = returning_result(_ema.plan)
+run = returning_result(_ema.run)
 quality = returning_result(_ema.quality)
 
 __doc__ = (_ema.__doc__ or "") + "\n\n" + __doc__.split("\n\n", 1)[1]
@@ -59,6 +60,7 @@ __all__ = [
     "read_frfs",
     "read_modes",
     "read_uff",
+    "run",
     "synthesize",
     "write_frfs",
     "write_modes",

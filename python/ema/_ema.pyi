@@ -13,6 +13,7 @@ import numpy.typing as npt
 
 from .types import CorrelationDict as CorrelationDict
 from .types import DiagnosisDict as DiagnosisDict
+from .types import RunDict as RunDict
 from .types import Dof as Dof
 from .types import FitDict as FitDict
 from .types import FrfDict as FrfDict
@@ -122,6 +123,10 @@ def diagnose(
 ) -> DiagnosisDict:
     """Which physical effect is the model missing, where, and how sure? As `ema diagnose`; returns
     DIAG.json's layout ('candidates' ranked, rank 1 first)."""
+
+def run(project: Path, output: Path = "ema-run") -> RunDict:
+    """A project file's whole story as `ema run` computes it (frf, fit, correlate, diagnose, correlate
+    with the updated model), writing no file; output only names the results' sources."""
 
 def plan(
     model: Model,

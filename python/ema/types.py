@@ -410,11 +410,87 @@ class _DiagnosisRequired(TypedDict):
     steps: List[DiagnosisStepDict]
 
 
+class FindingParameterDict(TypedDict):
+    name: str  # 'k', 'factor', 'mass', 'modulus', 'value'
+    value: Optional[float]  # SI units
+    sigma: Optional[float]
+
+
+class FindingSpringsDict(TypedDict):
+    setup: str
+    per_spring_n_per_m: Optional[float]  # mean linearised stiffness of the target's springs with rank 1's effects
+    element_n_per_m: Optional[float]  # series_compliance: the element in series alone
+
+
+class FindingWildcardDict(TypedDict):
+    target: str  # 'joints/*', 'points:*'
+    probability: float
+
+
+class _FindingRequired(TypedDict):
+    kind: str
+    target: str
+    description: str
+    probability: float  # summed over every candidate that holds the effect
+    parameters: List[FindingParameterDict]
+    springs: List[FindingSpringsDict]
+
+
+class FindingDict(_FindingRequired, total=False):
+    """One effect of rank 1 as numbers (DIAG.json findings[])."""
+
+    any: FindingWildcardDict
+
+
 class DiagnosisDict(_DiagnosisRequired, total=False):
-    """What diagnose returns: DIAG.json's layout without its printed summary and findings."""
+    """What diagnose returns: DIAG.json's layout, as `ema diagnose --json` writes it."""
 
     model_error: ModelErrorDict  # rank 1's, when there is a candidate
     modes: List[DiagnosisModeRowDict]  # every test mode before and after rank 1, when there is a candidate
+    findings: List[FindingDict]  # rank 1's effects as numbers
+    nonlinearity: Dict[str, Any]  # with force levels (ema diagnose --force-level)
+
+
+# --- run -------------------------------------------------------------------------------------------
+
+
+class RunTestDict(TypedDict):
+    name: str
+    setup: str
+    frf: Optional[Dict[str, Any]]  # `ema frf --json`; None when the project gives FRFs or the step failed
+    modes: Optional[Dict[str, Any]]  # `ema fit --json`
+    select_hz: List[float]  # the selection the fit used; [] = automatic
+    picked_by_hand: bool
+    correlation_before: Optional[CorrelationDict]
+    correlation_after: Optional[CorrelationDict]
+
+
+class RunStepDict(TypedDict):
+    step: str  # 'frf', 'fit', 'model (nominal)', 'correlate (nominal)', 'diagnose', ...
+    test: Optional[str]  # None for the diagnosis
+    status: Literal["done", "failed", "skipped", "given"]
+    error: str
+
+
+class RunProblemDict(TypedDict):
+    test: Optional[str]
+    what: str
+    error: str
+
+
+class RunDict(TypedDict):
+    """What run returns: a project's whole story, as `ema run` computes it."""
+
+    project: str
+    model: str
+    tests: List[RunTestDict]
+    diagnosis: Optional[DiagnosisDict]
+    steps: List[RunStepDict]
+    problems: List[RunProblemDict]
+    mean_agreement_pct_before: Optional[float]
+    mean_mac_before: Optional[float]
+    mean_agreement_pct_after: Optional[float]
+    mean_mac_after: Optional[float]
 
 
 # --- plan ------------------------------------------------------------------------------------------

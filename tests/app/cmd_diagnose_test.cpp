@@ -23,19 +23,26 @@ TEST(DiagnoseWords, AModelWrongOutsideTheVocabularySaysSoFirst) {
   DiagnoseConfig config;
   config.options.max_effects = 2;
   std::ostringstream out;
-  const DiagnoseStageResult stage = RunDiagnoseStage(config, nominal, {{"", test::Measured(truth, 11)}}, out);
+  const pipeline::DiagnoseStage stage = RunDiagnoseStage(config, nominal, {{"", test::Measured(truth, 11)}}, out);
+  const std::string summary = DiagnosisSummary(stage);
   const diagnose::Candidate& first = stage.diagnosis.candidates.front();
-  ASSERT_FALSE(first.noise_consistent) << stage.summary;
-  ASSERT_TRUE(first.model_error.dominates) << stage.summary;
+  ASSERT_FALSE(first.noise_consistent) << summary;
+  ASSERT_TRUE(first.model_error.dominates) << summary;
+  // The findings as numbers: inadequate, the modes all off one way (model too stiff or too light).
+  EXPECT_TRUE(stage.findings.model_inadequate);
+  EXPECT_TRUE(stage.findings.pattern.all_one_way);
+  EXPECT_TRUE(stage.findings.pattern.model_too_stiff);
   // The inadequacy first, with the error the modes share (the spread mass: ~0.6 % on all).
-  EXPECT_EQ(stage.summary.rfind("The model is NOT adequate to this test", 0), 0u) << stage.summary;
-  EXPECT_NE(stage.summary.find("shared by all of them"), std::string::npos) << stage.summary;
-  EXPECT_NE(stage.summary.find("distributed stiffness too high or mass too low"), std::string::npos) << stage.summary;
+  EXPECT_EQ(summary.rfind("The model is NOT adequate to this test", 0), 0u) << summary;
+  EXPECT_NE(summary.find("shared by all of them"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("distributed stiffness too high or mass too low"), std::string::npos) << summary;
   // Rank 1 is the model as given (no point mass invented), said as what it is.
-  ASSERT_TRUE(first.effects.empty()) << stage.summary;
-  EXPECT_EQ(stage.summary.find("no missing effect found"), std::string::npos) << stage.summary;
-  EXPECT_NE(stage.summary.find("what is missing is outside the vocabulary"), std::string::npos) << stage.summary;
-  EXPECT_TRUE(stage.json.at("findings").empty());
+  ASSERT_TRUE(first.effects.empty()) << summary;
+  EXPECT_EQ(summary.find("no missing effect found"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("what is missing is outside the vocabulary"), std::string::npos) << summary;
+  EXPECT_TRUE(stage.findings.effects.empty());
+  // What the command printed starts with the same first screen.
+  EXPECT_EQ(out.str().rfind(summary, 0), 0u);
 }
 
 }  // namespace

@@ -8,9 +8,9 @@
 
 #include "app/browser_check.hpp"
 #include "curvefit/synthetic.hpp"
+#include "ema/formats/mode_indicators_json.hpp"
+#include "ema/formats/quality_json.hpp"
 #include "ema/frf/quality.hpp"
-#include "mode_indicators_json.hpp"
-#include "quality_json.hpp"
 #include "report.hpp"
 #include "report_quality.hpp"
 
@@ -31,14 +31,14 @@ ReportInput MakeQualityInput() {
   SetupResults setup;
   setup.name = "quality";
   frf::QualityOptions options;
-  setup.quality = QualityJson(frf::CheckFrfQuality({frfs}, options, {"frf.unv"}), {}, options);
+  setup.quality = formats::QualityJson(frf::CheckFrfQuality({frfs}, options, {"frf.unv"}), {}, options);
   json orders = json::array();
   for (int order = 2; order <= 20; order += 2)
     orders.push_back({{"order", order},
                       {"poles", {{{"frequency_hz", 40.0}, {"damping_ratio", 0.01}, {"status", "stable"}},
                                  {{"frequency_hz", 100.0}, {"damping_ratio", 0.02}, {"status", "stable"}}}}});
   setup.stabilisation = {{"orders", orders}};
-  AddModeIndicatorsJson(&setup.stabilisation, frfs, {}, "frf.unv");
+  formats::AddModeIndicatorsJson(&setup.stabilisation, frfs, {}, "frf.unv");
   Mode mode;
   mode.frequency_hz = 40.0;
   mode.damping_ratio = 0.01;

@@ -1,4 +1,6 @@
 // The history of `ema run`s in one output folder and the diagnosed places (app/run_history.hpp).
+#include "ema/formats/model_file.hpp"
+#include "report.hpp"
 #include "run_history.hpp"
 
 #include <gtest/gtest.h>
@@ -61,8 +63,7 @@ TEST(RunHistory, EachRunAppendsAVersionWithItsEffectsHashAndAgreement) {
   r.agreement_after = 99.0;
   r.mac_before = 0.9;
   r.mac_after = 0.99;
-  r.diagnosis = json::parse(R"({"candidates": [{"rank": 1, "kind": "stiffness_scale", "target": "joints/J1",
-                                 "probability": 0.9}]})");
+  r.rank_one = RunRecord::RankOne{"stiffness_scale", "joints/J1", 0.9};
   json h = AppendRunHistory(kDir, r);
   ASSERT_EQ(h.size(), 1u);
   EXPECT_EQ(h[0]["version"], 1);
@@ -89,10 +90,15 @@ TEST(RunHistory, DiagnosedMemberIsPlacedAtItsSpringEnds) {
   fs::create_directories(kDir);
   const fs::path model = kDir / "places.toml";
   std::ofstream(model) << kModel;
-  const json d = json::parse(R"({"candidates": [{"rank": 1, "kind": "stiffness_scale+added_mass",
-      "effects": [{"kind": "stiffness_scale", "target": "joints/J1"}, {"kind": "added_mass", "target": "points:101"},
-                  {"kind": "mass_scale", "target": "top"}]}]})");
-  const json places = DiagnosedPlaces(model, d);
+  const model::Model m = formats::ReadModelFile(model);
+  auto effect = [](const char* kind, const char* target) {
+    model::Effect e;
+    e.kind = kind;
+    e.target = target;
+    return e;
+  };
+  const json places = report::DiagnosedPlaces(
+      m, {effect("stiffness_scale", "joints/J1"), effect("added_mass", "points:101"), effect("mass_scale", "top")});
   ASSERT_EQ(places.size(), 3u);
   EXPECT_EQ(places[0]["label"], "J1");
   // J1X and J1Z: end a at (0.1, 0, 0) each; end b is ground (not drawn).
@@ -101,7 +107,7 @@ TEST(RunHistory, DiagnosedMemberIsPlacedAtItsSpringEnds) {
   ASSERT_EQ(places[1]["points"].size(), 1u);
   EXPECT_DOUBLE_EQ(places[1]["points"][0][2].get<double>(), 0.1);
   EXPECT_DOUBLE_EQ(places[2]["points"][0][2].get<double>(), 0.05);  // the body's centre
-  EXPECT_TRUE(DiagnosedPlaces(model, json::parse(R"({"candidates": [{"kind": "none", "effects": []}]})")).empty());
+  EXPECT_TRUE(report::DiagnosedPlaces(m, {}).empty());  // rank 1 "none": nothing to draw
 }
 
 }  // namespace

@@ -115,10 +115,10 @@ TEST_F(GuidewayRun, RanksTheMountComplianceFirst) {
   EXPECT_EQ(best["rank"], 1);
   // The project declares the test's 11.2 g roving accelerometers (sensor_mass): they load each
   // set's points while it is measured and are no finding. Rank 1 is the mount compliance alone.
-  ASSERT_EQ(best["effects"].size(), 1u) << diagnosis["summary"];
+  ASSERT_EQ(best["effects"].size(), 1u) << diagnosis["explanation"];
   EXPECT_EQ(best["effects"][0]["kind"], "series_compliance");
   EXPECT_EQ(best["effects"][0]["target"], "bearings");
-  EXPECT_GE(best["probability"].get<double>(), 0.9) << diagnosis["summary"];
+  EXPECT_GE(best["probability"].get<double>(), 0.9) << diagnosis["explanation"];
   for (const auto& e : diagnosis["effect_probabilities"]) EXPECT_NE(e["kind"], "added_mass") << e.dump();
   // The truth (truth/model.toml) is the air film in series with a Hertz ball joint at each pad
   // (E' = 58 GPa, R' = 8.29 mm). Fitted as a Hertz element with R' fixed at 1 mm, only E'·sqrt(R')

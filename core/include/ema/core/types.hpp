@@ -8,6 +8,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -126,6 +127,21 @@ struct FrfSet {
   int LineCount() const { return static_cast<int>(frequency_hz.size()); }
   int OutputCount() const { return static_cast<int>(outputs.size()); }
   int ReferenceCount() const { return static_cast<int>(references.size()); }
+  /// The nodes of each roving set (sets in order of their index, nodes in order of first output);
+  /// empty when the sets are unknown.
+  std::vector<std::vector<int>> RovingSetNodes() const {
+    std::vector<std::vector<int>> sets;
+    if (output_sets.empty() || output_sets.size() != outputs.size()) return sets;
+    std::vector<int> ids(output_sets);
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    sets.resize(ids.size());
+    for (std::size_t o = 0; o < outputs.size(); ++o) {
+      std::vector<int>& nodes = sets[static_cast<std::size_t>(std::lower_bound(ids.begin(), ids.end(), output_sets[o]) - ids.begin())];
+      if (std::find(nodes.begin(), nodes.end(), outputs[o].node) == nodes.end()) nodes.push_back(outputs[o].node);
+    }
+    return sets;
+  }
 };
 
 /// A node of the test or model geometry (global coordinates, metres).

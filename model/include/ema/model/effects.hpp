@@ -100,6 +100,11 @@ struct Member {
 /// share none (or when that prefix is already another member's name in the group).
 std::vector<Member> Members(const Model& model);
 
+/// The test points (indices into Model::points) a points target of `effect` names: "all_points" or
+/// "points:101,102" — the one reader of that target. InputError naming the effect for another
+/// target, a bad or unknown point id, or "all_points" on a model without points.
+std::vector<int> TargetPoints(const Model& model, const Effect& effect);
+
 /// The spring indices a spring-group target names: "GROUP" (every spring of the group) or
 /// "GROUP/MEMBER". Empty when nothing matches.
 std::vector<int> TargetSprings(const Model& model, const std::string& target);

@@ -1,21 +1,24 @@
-#include "amplitude_levels.hpp"
-#include "ema/formats/json_codecs.hpp"
+#include "ema/formats/modes_sidecar.hpp"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <system_error>
+#include <utility>
 
-#include "cli.hpp"
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
+#include "ema/formats/json_codecs.hpp"
 
-namespace ema::app {
+namespace ema::formats {
 
-using nlohmann::json;
+using json = nlohmann::json;
 
 namespace {
-
-json NumberOrNull(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 /// σ of each mode from the `ema fit --json` file beside MODES.unv (same stem, .json), when it
 /// holds the same modes (same count, frequencies within 1e-6): `frequency_std_hz` and
@@ -52,36 +55,23 @@ std::vector<correlation::ModeUncertainty> SidecarUncertainty(const std::filesyst
   return any ? out : std::vector<correlation::ModeUncertainty>{};
 }
 
-}  // namespace
-
-json AmplitudeJson(const correlation::AmplitudeResult& r) {
-  json modes = json::array();
-  for (std::size_t i = 0; i < r.modes.size(); ++i) {
-    const correlation::AmplitudeMode& m = r.modes[i];
-    json levels = json::array();
-    for (const correlation::AmplitudePoint& p : m.points)
-      levels.push_back({{"level", p.level},
-                        {"frequency_hz", p.frequency_hz},
-                        {"damping_ratio", p.damping_ratio},
-                        {"frequency_std_hz", NumberOrNull(p.frequency_std_hz)},
-                        {"damping_ratio_std", NumberOrNull(p.damping_ratio_std)},
-                        {"poles", p.poles}});
-    modes.push_back({{"mode", i + 1},
-                     {"levels", levels},
-                     {"frequency_trend", correlation::FrequencyTrendToString(m.frequency_trend)},
-                     {"frequency_change_pct", m.frequency_change_pct},
-                     {"damping_trend", correlation::DampingTrendToString(m.damping_trend)},
-                     {"damping_ratio_factor", NumberOrNull(m.damping_ratio_factor)},
-                     {"frequency_slope_z", m.frequency_slope_z},
-                     {"frequency_extreme_z", m.frequency_extreme_z},
-                     {"damping_slope_z", m.damping_slope_z},
-                     {"target_level", m.points[static_cast<std::size_t>(m.target_point)].level},
-                     {"reading", m.reading}});
-  }
-  // The readings are text: valid UTF-8 whatever bytes they hold (formats::ValidUtf8).
-  return formats::ValidUtf8({{"level_kind", correlation::LevelKindToString(r.level_kind)}, {"levels", r.levels}, {"modes", modes}});
+/// A finite number given to `option` (a level of LEVEL=MODES.unv); UsageError "OPTION: expected a
+/// number, got 'TEXT'", the words of cli::ParseNumber, which the command lines' other numbers go
+/// through. What std::stod accepts: leading blanks, the whole text consumed, no overflow or
+/// underflow (ERANGE).
+double ParseLevelNumber(const std::string& text, const std::string& option) {
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  const int saved = errno;
+  errno = 0;
+  const double v = std::strtod(begin, &end);
+  const bool range_error = errno == ERANGE;
+  errno = saved;
+  if (end != begin && !range_error && static_cast<std::size_t>(end - begin) == text.size() && std::isfinite(v)) return v;
+  throw UsageError(option + ": expected a number, got '" + text + "'");
 }
 
+}  // namespace
 
 bool ReadSidecarTestSets(const std::string& modes_path, const ModeSet& modes, std::vector<std::vector<int>>* roving_sets,
                          Dof* reference) {
@@ -99,7 +89,7 @@ bool ReadSidecarTestSets(const std::string& modes_path, const ModeSet& modes, st
   // A sidecar must hold the same modes as the file beside it.
   if (!j.is_object() || !j.contains("modes") || !j["modes"].is_array() || j["modes"].size() != modes.modes.size())
     return false;
-  return formats::ReadTestSets(j, roving_sets, reference);
+  return ReadTestSets(j, roving_sets, reference);
 }
 
 void AttachSidecarUncertainty(const std::string& modes_path, ModeSet* modes) {
@@ -148,7 +138,7 @@ std::vector<correlation::AmplitudeLevel> ReadAmplitudeLevels(const std::vector<s
     const auto eq = a.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == a.size())
       throw UsageError(option + " expects LEVEL=MODES.unv, got '" + a + "'");
-    const double level = cli::ParseNumber(a.substr(0, eq), option);
+    const double level = ParseLevelNumber(a.substr(0, eq), option);
     if (!(level > 0.0))
       throw UsageError(option + ": level must be > 0, got '" + a.substr(0, eq) + "'");
     parsed.push_back({level, a.substr(eq + 1)});
@@ -158,7 +148,7 @@ std::vector<correlation::AmplitudeLevel> ReadAmplitudeLevels(const std::vector<s
     if (!std::filesystem::exists(path)) throw InputError(path, "mode file not found");
     correlation::AmplitudeLevel l;
     l.level = level;
-    l.modes = formats::ReadModeSet(path);
+    l.modes = ReadModeSet(path);
     l.modes.source = path;
     l.uncertainty = SidecarUncertainty(path, l.modes);
     levels.push_back(std::move(l));
@@ -166,4 +156,4 @@ std::vector<correlation::AmplitudeLevel> ReadAmplitudeLevels(const std::vector<s
   return levels;
 }
 
-}  // namespace ema::app
+}  // namespace ema::formats

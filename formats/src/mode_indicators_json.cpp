@@ -1,19 +1,21 @@
-#include "mode_indicators_json.hpp"
+#include "ema/formats/mode_indicators_json.hpp"
 
-#include <cmath>
+#include <vector>
 
 #include "ema/curvefit/mode_indicators.hpp"
+#include "ema/formats/json_codecs.hpp"
 
-namespace ema {
+namespace ema::formats {
 
 namespace {
 
-nlohmann::json Columns(const Eigen::MatrixXd& values) {
+// One JSON array per column of `values` (a singular value of the CMIF, an eigenvalue of the MMIF),
+// null where not finite.
+nlohmann::json IndicatorColumns(const Eigen::MatrixXd& values) {
   nlohmann::json out = nlohmann::json::array();
   for (int c = 0; c < values.cols(); ++c) {
     nlohmann::json col = nlohmann::json::array();
-    for (int k = 0; k < values.rows(); ++k)
-      col.push_back(std::isfinite(values(k, c)) ? nlohmann::json(values(k, c)) : nlohmann::json(nullptr));
+    for (int k = 0; k < values.rows(); ++k) col.push_back(NumberOrNull(values(k, c)));
     out.push_back(std::move(col));
   }
   return out;
@@ -26,8 +28,8 @@ void AddModeIndicatorsJson(nlohmann::json* stabilisation, const FrfSet& frfs, co
   const curvefit::FitData data = curvefit::PrepareFitData(frfs, options, source);
   const curvefit::ModeIndicators mi = curvefit::ComputeModeIndicators(data);
   const std::vector<double> f(mi.frequency_hz.data(), mi.frequency_hz.data() + mi.frequency_hz.size());
-  (*stabilisation)["cmif"] = {{"frequency_hz", f}, {"values", Columns(mi.cmif)}};
-  (*stabilisation)["mmif"] = {{"frequency_hz", f}, {"values", Columns(mi.mmif)}};
+  (*stabilisation)["cmif"] = {{"frequency_hz", f}, {"values", IndicatorColumns(mi.cmif)}};
+  (*stabilisation)["mmif"] = {{"frequency_hz", f}, {"values", IndicatorColumns(mi.mmif)}};
 }
 
-}  // namespace ema
+}  // namespace ema::formats

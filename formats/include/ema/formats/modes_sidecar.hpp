@@ -1,18 +1,22 @@
-// Reading mode sets per excitation level and writing the amplitude analysis as JSON: shared by
-// `ema amplitude` and `ema diagnose --force-level`, so both run the same analysis.
+// What a modes file's `ema fit --json` sidecar adds to it (the file beside MODES.unv with the same
+// stem and .json, when it holds the same modes): each mode's σ and per-set frequencies, the test's
+// roving sets and hammer DOF; and the mode sets per excitation level of `ema amplitude --level`
+// and `ema diagnose --force-level`, each with the σ of its sidecar. Read by those commands and by
+// the Python package.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "ema/core/types.hpp"
 #include "ema/correlation/amplitude.hpp"
 
-namespace ema::app {
+namespace ema::formats {
 
 /// Parses `LEVEL=MODES.unv` arguments of `option` (UsageError on a bad form or a level that is
-/// not a positive number) and reads each mode set, with each mode's σ from the `ema fit --json`
-/// file beside it (same stem, .json) when that file holds the same modes.
+/// not a positive number: "OPTION: expected a number, got 'TEXT'" as cli::ParseNumber words it)
+/// and reads each mode set, with each mode's σ from the `ema fit --json` file beside it (same
+/// stem, .json) when that file holds the same modes.
 std::vector<correlation::AmplitudeLevel> ReadAmplitudeLevels(const std::vector<std::string>& level_args,
                                                              const std::string& option);
 
@@ -30,7 +34,4 @@ void AttachSidecarUncertainty(const std::string& modes_path, ModeSet* modes);
 bool ReadSidecarTestSets(const std::string& modes_path, const ModeSet& modes, std::vector<std::vector<int>>* roving_sets,
                          Dof* reference);
 
-/// The JSON of cli.md ("ema amplitude").
-nlohmann::json AmplitudeJson(const correlation::AmplitudeResult& result);
-
-}  // namespace ema::app
+}  // namespace ema::formats

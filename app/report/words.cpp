@@ -1,0 +1,68 @@
+#include "words.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <variant>
+
+#include "ema/core/text.hpp"
+#include "ema/model/model.hpp"
+
+namespace ema::report {
+
+std::string Significant(double value, int digits) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.*g", digits, value);
+  return text;
+}
+
+std::string SelectText(const std::vector<double>& frequencies_hz) {
+  if (frequencies_hz.empty()) return "auto";
+  std::string list;
+  for (double f : frequencies_hz) {
+    if (!list.empty()) list += ',';
+    list += ExactNumberText(f);
+  }
+  return list;
+}
+
+std::string Percent(double probability) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f %%", 100.0 * probability);
+  return text;
+}
+
+std::string ParameterWords(const diagnose::FittedParameter& p, const model::Effect* e) {
+  const bool sigma = std::isfinite(p.sigma);
+  auto with = [&](double scale, const std::string& unit, const std::string& name) {
+    return name + Significant(p.value * scale) + (sigma ? " ± " + Significant(std::abs(p.sigma * scale), 2) : "") + unit;
+  };
+  const bool hertz = e && e->law && std::holds_alternative<model::HertzLaw>(e->law->value);
+  if (p.name == "modulus" || hertz) {
+    const double radius = hertz ? std::get<model::HertzLaw>(e->law->value).radius : kNaN;
+    return with(1e-9, " GPa", "Hertz contact E' = ") +
+           (std::isfinite(radius) ? " (R' = " + Significant(radius * 1e3) + " mm)" : "");
+  }
+  if (p.effect_kind == "series_compliance" || p.effect_kind == "ground_spring") return with(1e-6, " N/µm", "k = ");
+  if (p.effect_kind == "added_mass") return with(1e3, " g per point", "");
+  if (p.effect_kind == "operating_point")
+    return std::abs(p.value) < 1e-3 ? with(1e6, " µm", "value = ") : with(1.0, "", "value = ");
+  return with(1.0, "", "factor ");
+}
+
+std::string EffectValuesWords(const pipeline::EffectFinding& f) {
+  std::string out;
+  for (const diagnose::FittedParameter& p : f.parameters) out += (out.empty() ? "" : "; ") + ParameterWords(p, &f.effect);
+  if (f.springs.empty()) return out;
+  std::string whole, element;
+  for (const pipeline::SpringStiffness& s : f.springs) {
+    const std::string at = s.setup.empty() ? "" : " at " + s.setup;
+    whole += (whole.empty() ? "" : ", ") + Significant(s.per_spring_n_per_m / 1e6) + " N/µm" + at;
+    if (std::isfinite(s.element_n_per_m))
+      element += (element.empty() ? "" : ", ") + Significant(s.element_n_per_m / 1e6) + " N/µm" + at;
+  }
+  std::string springs = "per spring of '" + f.effect.target + "' now: " + whole;
+  if (!element.empty()) springs += " (the element in series alone: " + element + ")";
+  return out + (out.empty() ? "" : "; ") + springs;
+}
+
+}  // namespace ema::report

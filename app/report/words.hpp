@@ -1,0 +1,33 @@
+// The words the terminal and the HTML report both use for the same numbers: a fitted parameter
+// in engineering units with its σ, what rank 1's effect does to a spring group's stiffness, a
+// probability. One function each, so a value reads the same wherever it is shown.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ema/diagnose/diagnose.hpp"
+#include "ema/pipeline/findings.hpp"
+
+namespace ema::report {
+
+/// printf "%.*g": the significant digits a reader needs.
+std::string Significant(double value, int digits = 3);
+
+/// "auto" (none) or the frequencies as `ema fit --select` takes them, each exactly (ExactNumberText).
+std::string SelectText(const std::vector<double>& frequencies_hz);
+
+/// "12.3 %" of a probability in [0, 1].
+std::string Percent(double probability);
+
+/// A fitted parameter in engineering units with its 1σ: "Hertz contact E' = 168 ± 0.37 GPa
+/// (R' = 1 mm)", "k = 2.8 ± 0.1 N/µm", "10.9 ± 2.6 g per point", "factor 0.31 ± 0.02",
+/// "value = 5.1 ± 0.2 µm". `effect`: the effect it belongs to (a Hertz law's radius), or null.
+std::string ParameterWords(const diagnose::FittedParameter& parameter, const model::Effect* effect);
+
+/// An effect's fitted values and, for a spring target, its springs' stiffness per setup:
+/// "k = 6.4 ± 0.3 N/µm; per spring of 'mounts' now: 2.80 N/µm at stud-5um (the element in series
+/// alone: 21.8 N/µm at stud-5um)".
+std::string EffectValuesWords(const pipeline::EffectFinding& finding);
+
+}  // namespace ema::report

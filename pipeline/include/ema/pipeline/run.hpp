@@ -1,0 +1,123 @@
+// `ema run` as a library: a typed RunPlan (the project file, read and validated once by
+// formats::ReadProjectFile) → pipeline::Run → a typed RunResult holding every stage's result.
+// Run reads the inputs the plan names (time data, FRFs, the model) and writes nothing; every
+// output — the files of OUTDIR, the terminal summary, the HTML report, Python's dicts — is a
+// function of the RunResult (app/run_outputs.hpp, app/report).
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ema/core/progress.hpp"
+#include "ema/correlation/correlate.hpp"
+#include "ema/formats/project_file.hpp"
+#include "ema/frf/quality.hpp"
+#include "ema/model/solve.hpp"
+#include "ema/pipeline/stages.hpp"
+
+namespace ema::pipeline {
+
+/// A run's stages, in the order they run for each test (the diagnosis runs once, between).
+enum class StepKind { kFrf, kFit, kModelBefore, kCorrelateBefore, kDiagnose, kModelAfter, kCorrelateAfter };
+
+enum class StepStatus {
+  kDone,
+  kFailed,   ///< threw: `error` holds the message
+  kSkipped,  ///< a stage it needs failed or gave nothing: `error` holds why
+  kGiven,    ///< not needed: the project gives its result (FRFs from a file)
+};
+
+struct StepRecord {
+  StepKind kind = StepKind::kFrf;
+  int test = -1;                 ///< index into RunPlan::project.tests; -1 for the diagnosis
+  StepStatus status = StepStatus::kDone;
+  std::string error;
+};
+
+/// What a `pick = true` test's picker returns: the frequencies picked (empty: automatic
+/// selection), or nullopt when Done was pressed with nothing picked (the project's selection stays).
+using PickResult = std::optional<std::vector<double>>;
+/// Opens the picker on one test's FRFs with the fit's options; throws RunStopped to stop the run.
+using PickHook =
+    std::function<PickResult(const formats::ProjectTest& test, const FrfSet& frfs, const curvefit::FitOptions& fit)>;
+
+/// Thrown by a PickHook when the user stopped the run (Ctrl-C, SIGTERM) while picking.
+class RunStopped : public std::runtime_error {
+ public:
+  RunStopped(int signal, std::string test) : std::runtime_error("stopped while picking " + test), signal_(signal), test_(std::move(test)) {}
+  int signal() const { return signal_; }
+  const std::string& test() const { return test_; }
+
+ private:
+  int signal_;
+  std::string test_;
+};
+
+struct RunPlan {
+  formats::Project project;          ///< tests, model, the steps' typed options ([frf], [fit], [diagnose])
+  /// The folder the run's files go to: it names the results' sources (the modes file a correlation
+  /// read, the updated model's origin) exactly as the subcommands run one after the other would.
+  std::filesystem::path output_dir;
+  PickHook pick;                     ///< for `pick = true` tests; empty: their selection is used
+};
+
+/// A plan from a project file read by formats::ReadProjectFile.
+RunPlan PlanFromProject(formats::Project project, std::filesystem::path output_dir);
+
+/// Per test: each stage's typed result, empty where it failed or was skipped.
+struct TestResult {
+  std::optional<FrfStage> frf;                 ///< estimated in this run (not when the project gives FRFs)
+  std::optional<FrfSet> frfs;                  ///< the FRFs of the test as stored: estimated or the project's file
+  curvefit::FitOptions fit_options;            ///< as the fit used them (band, order, selection)
+  bool picked_by_hand = false;                 ///< the selection was picked in `ema pick` during the run
+  std::optional<FitStage> fit;
+  std::optional<model::Solution> model_before, model_after;  ///< modes' source = the model file
+  std::optional<correlation::CorrelationResult> correlation_before, correlation_after;
+  /// The data-quality checks of the FRFs in the fit band (the report's "Data quality").
+  std::optional<frf::FrfQualityReport> quality;
+  frf::QualityOptions quality_options;
+};
+
+/// A problem that is not a failed step: a picker that could not start, a check that could not run.
+struct RunProblem {
+  int test = -1;
+  std::string what;        ///< "pick", "data-quality checks", "FRFs"
+  std::string error;       ///< the error's message
+};
+
+struct RunResult {
+  RunPlan plan;
+  std::optional<model::Model> nominal;         ///< the model as given; empty when it cannot be read
+  std::string nominal_error;
+  std::vector<TestResult> tests;               ///< one per plan.project.tests
+  std::optional<DiagnoseStage> diagnosis;      ///< over every test with modes
+  std::vector<StepRecord> steps;               ///< every step, in the order run
+  std::vector<RunProblem> problems;
+  /// Mean agreement (%) and MAC over the tests' correlations with the nominal and the updated
+  /// model; NaN when none.
+  double mean_agreement_before = std::numeric_limits<double>::quiet_NaN();
+  double mean_mac_before = mean_agreement_before, mean_agreement_after = mean_agreement_before,
+         mean_mac_after = mean_agreement_before;
+
+  /// The updated model's file name in output_dir ("updated-model.toml").
+  std::filesystem::path UpdatedModelPath() const { return plan.output_dir / "updated-model.toml"; }
+  /// A test's modes file (OUTDIR/<test>/modes.unv).
+  std::filesystem::path ModesPath(std::size_t test) const;
+  /// True when every step is done or given and no problem was met.
+  bool Succeeded() const;
+};
+
+/// Runs the plan: per test frf → fit → model → correlate, then the diagnosis over all tests, then
+/// per test model → correlate with the updated model. A failed step is recorded, the steps that
+/// need it are skipped, the others run. `progress` gets the share of steps done and the step's
+/// name. Throws RunStopped (from the pick hook) and nothing else.
+RunResult Run(const RunPlan& plan, const ProgressCallback& progress = {});
+
+/// "frf", "fit", "model (nominal)", ...: a step's name.
+std::string StepName(StepKind kind);
+
+}  // namespace ema::pipeline

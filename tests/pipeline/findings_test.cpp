@@ -1,0 +1,141 @@
+// pipeline::FindingsOf: the first screen's numbers from a diagnosis — the springs' stiffness with
+// rank 1's effect against the series-spring formula, the look-alike rule at its factor-20 edge,
+// the verdict per test mode at 2σ and 3σ, each mode's share of the fall in χ², the misfit pattern.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "ema/formats/model_file.hpp"
+#include "ema/model/effects.hpp"
+#include "ema/model/solve.hpp"
+#include "ema/pipeline/findings.hpp"
+
+namespace ema::pipeline {
+namespace {
+
+diagnose::ModeComparison Mode(int m, double frequency_sigma, double shape_sigma, bool paired = true) {
+  diagnose::ModeComparison c;
+  c.test_mode = m;
+  c.model_mode = paired ? m : -1;
+  c.test_frequency_hz = 100.0 * (m + 1);
+  c.sigma_hz = 0.1 * (m + 1);
+  c.model_frequency_hz = paired ? c.test_frequency_hz + frequency_sigma * c.sigma_hz : kNaN;
+  c.frequency_misfit_sigma = frequency_sigma;
+  c.mac = paired ? 0.99 : kNaN;
+  c.shape_misfit_sigma = shape_sigma;
+  return c;
+}
+
+diagnose::Candidate Reading(int rank, const std::string& kind, const std::string& target, double probability) {
+  diagnose::Candidate c;
+  c.rank = rank;
+  c.kind = kind;
+  c.target = target;
+  c.probability = probability;
+  if (kind != "none") {
+    model::Effect e;
+    e.kind = kind;
+    e.target = target;
+    c.effects = {e};
+  }
+  return c;
+}
+
+TEST(Findings, SpringsOfRankOnesComplianceFollowTheSeriesFormula) {
+  // The benchmark's two-body stack with a compliance of 2 N/µm in series with every mount: each
+  // mount spring's linearised stiffness becomes k k_e / (k + k_e), and the element alone is k_e.
+  const model::Model nominal =
+      formats::ReadModelFile(std::filesystem::path(EMA_SOURCE_DIR) / "tests/diagnose/data/benchmark-stack2.toml");
+  const double k_e = 2e6;
+  diagnose::Diagnosis d;
+  d.candidates = {Reading(1, "series_compliance", "mounts", 0.9), Reading(2, "none", "", 0.1)};
+  d.candidates[0].effects[0].parameters["k"] = k_e;
+  diagnose::FittedParameter p;
+  p.effect_kind = "series_compliance";
+  p.target = "mounts";
+  p.name = "k";
+  p.value = k_e;
+  p.sigma = 1e5;
+  d.candidates[0].parameters = {p};
+  d.candidates[0].modes = {Mode(0, 0.5, 0.2)};
+  d.baseline = d.candidates[1];
+  d.baseline.modes = {Mode(0, 40.0, 1.0)};
+  d.effect_probabilities = {{"series_compliance", "mounts", 0.9}};
+  const Findings f = FindingsOf(d, nominal);
+  ASSERT_EQ(f.effects.size(), 1u);
+  EXPECT_DOUBLE_EQ(f.effects[0].probability, 0.9);
+  EXPECT_TRUE(f.effects[0].wildcard.empty());  // a whole group: no wildcard of its own
+  ASSERT_EQ(f.effects[0].parameters.size(), 1u);
+  ASSERT_EQ(f.effects[0].springs.size(), 1u);
+  const model::Solution before = model::Solve(nominal, {});
+  double expected = 0.0;
+  const std::vector<int> mounts = model::TargetSprings(nominal, "mounts");
+  for (int i : mounts) {
+    const double k = before.springs[static_cast<std::size_t>(i)].stiffness;
+    expected += k * k_e / (k + k_e);
+  }
+  expected /= static_cast<double>(mounts.size());
+  EXPECT_NEAR(f.effects[0].springs[0].per_spring_n_per_m, expected, 1e-9 * expected);
+  EXPECT_NEAR(f.effects[0].springs[0].element_n_per_m, k_e, 1e-9 * k_e);
+  // The single mode carries the whole fall in χ²: (40² + 1²) − (0.5² + 0.2²) of it.
+  ASSERT_EQ(f.modes.size(), 1u);
+  EXPECT_DOUBLE_EQ(f.modes[0].share_pct, 100.0);
+  EXPECT_EQ(f.modes[0].verdict, ModeVerdict::kWithinNoise);
+}
+
+TEST(Findings, LookAlikesWithinAFactor20AndVerdictsAt2And3Sigma) {
+  diagnose::Diagnosis d;
+  // Rank 1 at 0.5; a group of 3 readings on points summed to 0.5 + 0.03; one reading at
+  // 0.5/20 × 1.01 (in) and one at 0.5/20 × 0.99 (out).
+  d.candidates = {Reading(1, "added_mass", "points:101", 0.5), Reading(2, "added_mass", "points:102", 0.02),
+                  Reading(3, "added_mass", "points:103", 0.01), Reading(4, "stiffness_scale", "joints", 0.5 / 20 * 1.01),
+                  Reading(5, "mass_scale", "top", 0.5 / 20 * 0.99), Reading(6, "none", "", 0.0)};
+  d.candidates[0].noise_consistent = false;
+  d.candidates[0].reduced_chi2 = 12.0;
+  d.candidates[0].modes = {Mode(0, 1.0, 0.5), Mode(1, 2.5, 0.1), Mode(2, -1.5, 3.5), Mode(3, 0.0, 0.0, false)};
+  d.candidates[0].model_error.frequency_rel = 0.01;  // the shared part (0) below each mode's
+  d.baseline = d.candidates[5];
+  d.baseline.modes = {Mode(0, 3.0, 0.5), Mode(1, 4.0, 0.1), Mode(2, -1.5, 3.5), Mode(3, 0.0, 0.0, false)};
+  d.groups = {{"added_mass", "points:*", {1, 2, 3}, 0.53},
+              {"stiffness_scale", "joints", {4}, 0.5 / 20 * 1.01},
+              {"mass_scale", "top", {5}, 0.5 / 20 * 0.99},
+              {"none", "", {6}, 0.0}};
+  d.effect_probabilities = {{"added_mass", "points:*", 0.53}, {"added_mass", "points:101", 0.5}};
+  const Findings f = FindingsOf(d, model::Model());
+  ASSERT_EQ(f.lookalikes.size(), 2u);
+  EXPECT_TRUE(f.lookalikes[0].holds_rank_one);
+  EXPECT_EQ(f.lookalikes[0].readings, 2);
+  EXPECT_NEAR(f.lookalikes[0].probability, 0.03, 1e-15);
+  EXPECT_EQ(f.lookalikes[0].span, GroupSpan::kPoints);
+  EXPECT_EQ(f.lookalikes[1].kind, "stiffness_scale");
+  EXPECT_FALSE(f.lookalikes[1].holds_rank_one);
+  EXPECT_EQ(f.effects[0].wildcard, "points:*");
+  EXPECT_DOUBLE_EQ(f.effects[0].wildcard_probability, 0.53);
+  // Verdicts: 1σ within noise, 2.5σ marginal, 3.5σ in shape a misfit, unpaired.
+  ASSERT_EQ(f.modes.size(), 4u);
+  EXPECT_EQ(f.modes[0].verdict, ModeVerdict::kWithinNoise);
+  EXPECT_EQ(f.modes[1].verdict, ModeVerdict::kMarginal);
+  EXPECT_EQ(f.modes[2].verdict, ModeVerdict::kMisfit);
+  EXPECT_EQ(f.modes[3].verdict, ModeVerdict::kUnpaired);
+  // The fall in χ²: mode 1 9 − 1 = 8, mode 2 16 − 6.25 = 9.75, mode 3 nothing.
+  EXPECT_NEAR(f.modes[0].share_pct, 100.0 * 8.0 / 17.75, 1e-12);
+  EXPECT_NEAR(f.modes[1].share_pct, 100.0 * 9.75 / 17.75, 1e-12);
+  EXPECT_NEAR(f.modes[2].share_pct, 0.0, 1e-12);
+  // Not adequate, but the model's own error does not dominate: no "outside the vocabulary".
+  EXPECT_FALSE(f.adequate);
+  EXPECT_FALSE(f.model_inadequate);
+  // The worst modes first: mode 3 (3.8σ), then 2 (2.5σ), then 1 (1.1σ).
+  ASSERT_EQ(f.worst_modes.size(), 3u);
+  EXPECT_EQ(f.worst_modes[0], 2);
+  EXPECT_EQ(f.worst_modes[1], 1);
+  EXPECT_EQ(f.worst_modes[2], 0);
+  // Paired modes off both ways by more than 1σ (+2.5 and −1.5): distributed differently.
+  EXPECT_FALSE(f.pattern.all_one_way);
+  EXPECT_TRUE(f.pattern.mixed);
+  EXPECT_TRUE(f.pattern.shapes_off_more);  // shapes 0.5² + 0.1² + 3.5² against 1 + 6.25 + 2.25
+  EXPECT_TRUE(f.pattern.unpaired_modes);
+}
+
+}  // namespace
+}  // namespace ema::pipeline
