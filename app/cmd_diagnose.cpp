@@ -222,7 +222,8 @@ std::string app::DiagnosisSummary(const pipeline::DiagnoseStage& stage) {
       out << "  " << i + 1 << ". " << diagnose::DescribeCandidate(single) << " — " << Percent(e.probability)
           << " over every candidate that holds it";
       if (!e.wildcard.empty())
-        out << " (" << Percent(e.wildcard_probability) << " for " << e.effect.kind << " on any of " << e.wildcard << ")";
+        out << " (" << Percent(e.wildcard_probability) << " for " << model::KindName(e.effect.kind) << " on any of "
+            << e.wildcard << ")";
       out << "\n";
       const std::string values = report::EffectValuesWords(e);
       if (!values.empty()) out << "     " << values << "\n";

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 #include "ema/core/text.hpp"
@@ -261,6 +262,23 @@ std::string RunSummary(const pipeline::RunResult& run, const nlohmann::json& his
     // The diagnosis's first screen, as `ema diagnose` prints it.
     std::istringstream first_screen(DiagnosisSummary(*run.diagnosis));
     for (std::string l; std::getline(first_screen, l);) lines.push_back("  " + l);
+  }
+  if (run.next_test) {
+    // The test that tells rank 1's look-alikes apart, in one line (the report draws it).
+    const pipeline::NextTest& next = *run.next_test;
+    std::string dofs;
+    for (std::size_t s = static_cast<std::size_t>(next.kept_sets); s < next.plan.sets.size(); ++s)
+      for (const Dof& d : next.plan.sets[s]) dofs += (dofs.empty() ? "" : ", ") + DofName(d);
+    double before = std::numeric_limits<double>::infinity(), after = before;
+    for (const planning::Separation& sep : next.plan.separations)
+      if (sep.sigma_before < before) before = sep.sigma_before, after = sep.sigma_after;
+    lines.push_back("  Next test to tell them apart: one more roving set at " + dofs + " beside " +
+                    project.tests[static_cast<std::size_t>(next.test)].name + "'s " + std::to_string(next.kept_sets) +
+                    (std::isfinite(before) ? " — the closest pair from " + Fixed(before, 1) + " σ to " + Fixed(after, 1) + " σ apart"
+                                           : std::string()) +
+                    " (ema plan --candidates; the report draws it).");
+  } else if (!run.next_test_error.empty()) {
+    lines.push_back("  Next test to tell them apart: could not be planned: " + run.next_test_error);
   }
   if (history.is_array() && history.size() > 1) {
     const nlohmann::json& prev = history[history.size() - 2];

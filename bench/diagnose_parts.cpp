@@ -55,7 +55,7 @@ void RunFrame(benchmark::State& state, int segments, int zones, bool model_error
   const testing::FrameFiles files = testing::WriteFrame(dir, spec);
   const model::Model nominal = formats::ReadModelFile(files.model);
   const model::Model truth =
-      model::ApplyEffect(nominal, {"stiffness_scale", "girders/G3", {{"factor", 0.4}}, std::nullopt, 0});
+      model::ApplyEffect(nominal, {model::EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.4}}, std::nullopt, 0});
   const ModeSet test = VerticalModes(truth, 6, 1e-3, 7);
   diagnose::Diagnosis d;
   diagnose::DiagnoseOptions options;
@@ -99,7 +99,8 @@ void RunFootbridge(benchmark::State& state, bool geometry) {
   const testing::FrameFiles files = testing::WriteFrame(dir, spec);
   model::Model nominal = formats::ReadModelFile(files.model);
   if (!geometry) nominal.fe.node_positions.clear();
-  model::Model truth = model::ApplyEffect(nominal, {"stiffness_scale", "girders/G3", {{"factor", 0.6}}, std::nullopt, 0});
+  model::Model truth =
+      model::ApplyEffect(nominal, {model::EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.6}}, std::nullopt, 0});
   std::mt19937 rng(37);
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (model::FePart& part : truth.fe.parts) part.stiffness_factor *= std::exp(0.03 * gauss(rng));

@@ -11,15 +11,13 @@
 #include "ema/formats/json_codecs.hpp"
 #include "ema/formats/plan_json.hpp"
 #include "ema/formats/quality_json.hpp"
+#include "ema/model/effects.hpp"
 #include "json_fuzz_gen.hpp"
 
 namespace {
 
 using ema::fuzz::Gen;
 using nlohmann::json;
-
-const char* const kKinds[] = {"series_compliance", "stiffness_scale", "operating_point", "added_mass", "mass_scale",
-                              "ground_spring"};
 
 ema::model::Law MakeLaw(Gen& g, int depth) {
   using namespace ema::model;
@@ -50,7 +48,13 @@ ema::model::Law MakeLaw(Gen& g, int depth) {
   }
 }
 
-std::string Kind(Gen& g) { return g.Bool() ? std::string(kKinds[g.Int(0, 5)]) : g.Text(); }
+ema::model::EffectKind Kind(Gen& g) {
+  const auto& table = ema::model::EffectKindTable();
+  return table[static_cast<std::size_t>(g.Int(0, static_cast<int>(table.size()) - 1))].kind;
+}
+
+// A candidate group's label: a kind's name or any text.
+std::string KindLabel(Gen& g) { return g.Bool() ? ema::model::KindName(Kind(g)) : g.Text(); }
 
 ema::model::Effect MakeEffect(Gen& g) {
   ema::model::Effect e;
@@ -348,7 +352,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       for (auto& e : d.effect_probabilities) e = {Kind(g), g.Text(), g.Double()};
       d.groups.resize(g.Count(4));
       for (auto& gr : d.groups) {
-        gr.kind = Kind(g);
+        gr.kind = KindLabel(g);
         gr.target = g.Text();
         for (std::size_t n = g.Count(4); n > 0; --n) gr.ranks.push_back(g.AnyInt());
         gr.probability = g.Double();

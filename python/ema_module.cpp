@@ -14,21 +14,27 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <complex>
 #include <cstdlib>
 #include <filesystem>
+#include <future>
 #include <fstream>
 #include <map>
 #include <memory>
 #include <optional>
+#include <pthread.h>
 #include <set>
+#include <signal.h>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/core/error.hpp"
+#include "ema/core/progress.hpp"
 #include "ema/correlation/correlate.hpp"
 #include "ema/correlation/mac.hpp"
 #include "ema/curvefit/complexity.hpp"
@@ -489,6 +495,68 @@ std::pair<double, double> Band(const py::object& band) {
   return t;
 }
 
+// ------------------------------------------------------------------------------------------------
+// Ctrl-C in a computation whose progress callback the core calls from worker threads (ema.fit,
+// ema.estimate_frfs, ema.run). Python runs a signal's handler on the main thread only, and only when that
+// thread asks (PyErr_CheckSignals); asked from a worker thread it does nothing. So the computation
+// runs on a thread of its own with the GIL released, the asynchronous signals blocked there (and in
+// the threads it starts, which inherit the mask: a signal goes to the main thread, and no system
+// call of the computation is interrupted by one). The main thread waits for it in slices of 50 ms
+// and between two takes the GIL for a moment to ask Python whether a signal is pending. When the
+// handler raised (SIGINT: KeyboardInterrupt), the cancel flag goes up: the computation's progress
+// callback throws ema::Cancelled at its next step, from whichever thread calls it, the core stops
+// its other workers and unwinds (core/parallel.hpp), and once the computation's thread has
+// finished the handler's exception is raised here. A computation that ends otherwise returns its
+// result or raises its own error as before.
+
+void BlockAsynchronousSignals() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGALRM, SIGUSR1, SIGUSR2, SIGCHLD, SIGWINCH})
+    sigaddset(&set, signal);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+}
+
+/// `compute(progress)` (C++ only: it must not touch a Python object) on a thread of its own, stopped
+/// by Ctrl-C as above. Called with the GIL held.
+template <class Compute>
+auto RunInterruptibly(Compute&& compute) -> std::invoke_result_t<Compute&, const ema::ProgressCallback&> {
+  using Result = std::invoke_result_t<Compute&, const ema::ProgressCallback&>;
+  ema::CancelFlag cancel;
+  const ema::ProgressCallback progress = cancel.Callback();
+  std::optional<py::error_already_set> interrupted;
+  std::future<Result> done;
+  {
+    py::gil_scoped_release release;
+    done = std::async(std::launch::async, [&]() -> Result {
+      BlockAsynchronousSignals();
+      return compute(progress);
+    });
+    // Whatever leaves this block, the computation is stopped and waited for first: it uses
+    // `cancel`, `progress` and the caller's inputs.
+    struct StopAndWait {
+      ema::CancelFlag& cancel;
+      std::future<Result>& done;
+      ~StopAndWait() {
+        if (done.valid() && done.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+          cancel.Cancel();
+          done.wait();
+        }
+      }
+    } stop_and_wait{cancel, done};
+    while (done.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
+      if (interrupted) continue;  // asked once; now waiting for the computation to unwind
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        interrupted.emplace();  // takes the handler's exception (KeyboardInterrupt) off the indicator
+        cancel.Cancel();
+      }
+    }
+  }
+  if (interrupted) throw *interrupted;
+  return done.get();
+}
+
 /// nlohmann::json to Python via the json module (plain dict/list/float/None).
 py::object FromJson(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
@@ -746,10 +814,8 @@ ema::model::Model BuildModel(const py::handle& o) {
     keys.push_back("stiffness_fault_share");  // model-format.md [priors], added turn 4
     keys.push_back("stiffness_fault_width");
     const Fields pf(priors, f.At("priors"), keys);
-    for (const auto& kind : keys) {
-      if (kind.rfind("stiffness_fault_", 0) == 0) continue;
-      if (const py::object v = pf.Get(kind); !v.is_none()) m.priors[kind] = Uncertainty(v, pf.At(kind));
-    }
+    for (const md::EffectKindInfo& info : md::EffectKindTable())
+      if (const py::object v = pf.Get(info.name); !v.is_none()) m.priors[info.kind] = Uncertainty(v, pf.At(info.name));
     if (const py::object v = pf.Get("stiffness_fault_share"); !v.is_none()) {
       const double share = py::cast<double>(v);
       if (!(share >= 0.0 && share < 1.0)) throw ema::InputError(pf.At("stiffness_fault_share"), "expected a share in [0, 1)");
@@ -1089,8 +1155,7 @@ PYBIND11_MODULE(_ema, m) {
         if (!quantity.empty() && !ema::FromName(ema::frf::kOutputQuantityNames, quantity, &opt.output_quantity))
           throw py::value_error("quantity: expected " + ema::NameList(ema::frf::kOutputQuantityNames) + ", got '" + quantity + "'");
         if (std::string why; !opt.IsValid(&why)) throw py::value_error(why);
-        std::vector<ema::acquisition::RecordSet> sets;
-        for (const auto& p : files) sets.push_back({p, ema::formats::ReadTimeRecords(p)});
+        std::vector<ema::acquisition::RecordSet> sets;  // from the arrays; the files are read below
         if (arrays) {
           // force: (impacts, samples); response: (impacts, channels, samples), or (channels,
           // samples) for one impact; the records as a file of them would hold (formats.md).
@@ -1135,24 +1200,30 @@ PYBIND11_MODULE(_ema, m) {
             force_record.channel = hammer, force_record.reference = hammer, force_record.impact = static_cast<int>(i + 1);
             force_record.quantity = ema::Quantity::kForce, force_record.sample_interval_s = 1.0 / rate, force_record.unit = "N";
             force_record.origin = "force[" + std::to_string(i) + "]";
-            for (py::ssize_t k = 0; k < samples; ++k) force_record.samples.push_back(fv(i, k));
+            force_record.samples.assign(&fv(i, 0), &fv(i, 0) + samples);
             set.records.push_back(std::move(force_record));
             for (py::ssize_t c = 0; c < channels; ++c) {
               ema::TimeRecord rec;
               rec.channel = channel_dofs[static_cast<size_t>(c)], rec.reference = hammer, rec.impact = static_cast<int>(i + 1);
               rec.quantity = q, rec.sample_interval_s = 1.0 / rate, rec.unit = unit;
               rec.origin = "response[" + std::to_string(i) + ", " + std::to_string(c) + "]";
-              for (py::ssize_t k = 0; k < samples; ++k) rec.samples.push_back(rv(i, c, k));
+              rec.samples.assign(&rv(i, c, 0), &rv(i, c, 0) + samples);
               set.records.push_back(std::move(rec));
             }
           }
           sets.push_back(std::move(set));
         }
-        ema::frf::FrfResult result;
-        {
-          py::gil_scoped_release release;
-          result = ema::frf::EstimateFrfs(ema::acquisition::AssembleHammerMeasurement(std::move(sets)), opt);
-        }
+        // The files read, the impacts analysed and the spectra taken with Ctrl-C stopping them at the
+        // next file, record or spectrum.
+        const ema::frf::FrfResult result = RunInterruptibly([&](const ema::ProgressCallback& progress) {
+          std::vector<ema::acquisition::RecordSet> read;
+          for (const auto& p : files) {
+            ema::ReportProgress(progress, 0.0, "reading");
+            read.push_back({p, ema::formats::ReadTimeRecords(p)});
+          }
+          for (auto& s : sets) read.push_back(std::move(s));
+          return ema::frf::EstimateFrfs(ema::acquisition::AssembleHammerMeasurement(std::move(read)), opt, progress);
+        });
         py::dict d = FrfDict(result.frfs);
         // What `ema frf --json` writes: per FRF its averages and rejections, and every rejected
         // impact with its file and reason.
@@ -1178,7 +1249,8 @@ PYBIND11_MODULE(_ema, m) {
       "`ema frf --json` writes (per FRF its 'rejected' impacts with their file and reason).\n"
       "Or the records as numpy arrays, one roving set: force (impacts, samples) in N, response (impacts,\n"
       "channels, samples), fs in Hz, dofs (one per channel, e.g. (101, '+Z')), reference (the hammer DOF),\n"
-      "response_quantity ('acceleration' in m/s^2, 'velocity', 'displacement').");
+      "response_quantity ('acceleration' in m/s^2, 'velocity', 'displacement').\n"
+      "Ctrl-C stops the estimation at its next file, record or spectrum (KeyboardInterrupt).");
 
   m.def(
       "fit",
@@ -1194,11 +1266,9 @@ PYBIND11_MODULE(_ema, m) {
         else if (method != "polymax") throw py::value_error("method: expected 'polymax' or 'peak'");
         if (!ema::curvefit::StringToRefineMethod(refine, &opt.refine))
           throw py::value_error("refine: expected 'ml' or 'none', got '" + refine + "'");
-        ema::curvefit::FitResult fit;
-        {
-          py::gil_scoped_release release;
-          fit = ema::curvefit::Fit(set, opt, "frfs");
-        }
+        // Ctrl-C stops the fit at its next step (a PolyMAX order, a refinement iteration).
+        const ema::curvefit::FitResult fit = RunInterruptibly(
+            [&](const ema::ProgressCallback& progress) { return ema::curvefit::Fit(set, opt, "frfs", progress); });
         // As `ema fit` exits 1: a fit that finds nothing is an error, not an empty result.
         if (fit.modes.modes.empty())
           throw py::value_error(
@@ -1253,7 +1323,8 @@ PYBIND11_MODULE(_ema, m) {
       "through warnings.warn (RuntimeWarning) and kept in the result's 'warnings'.\n"
       "stabilisation=True adds 'stabilisation' (the diagram as `ema fit --stabilisation` writes it: poles per\n"
       "order with their stability), 'modal_model' (poles, residues and residual terms per measured FRF, as in\n"
-      "`ema fit --json`) and 'dropped' (poles the fit dropped, each with its reason).");
+      "`ema fit --json`) and 'dropped' (poles the fit dropped, each with its reason).\n"
+      "Ctrl-C stops the fit at its next step (KeyboardInterrupt).");
 
   m.def(
       "synthesize",
@@ -1542,18 +1613,13 @@ PYBIND11_MODULE(_ema, m) {
           throw ema::UsageError(project.file.string() + ": [fit] args / [diagnose] args (the old form of the keys) are "
                                 "read by `ema run` only; give each option as a key (docs/project-file.md)");
         const ema::pipeline::RunPlan plan = ema::pipeline::PlanFromProject(std::move(project), PathOf(output));
-        // Ctrl-C: at every progress step the run takes the GIL back for a moment and asks Python
-        // whether a signal is pending (as ema.diagnose).
-        const auto progress = [](double, std::string_view) {
-          py::gil_scoped_acquire acquire;
-          if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-        };
-        std::optional<ema::pipeline::RunResult> run;
-        {
-          py::gil_scoped_release release;
-          run = ema::pipeline::Run(plan, progress);
-        }
-        return FromJson(ema::pipeline::RunResultJson(*run));
+        // Ctrl-C stops the run at its next progress step (a step, an impact record, a PolyMAX order, a
+        // refinement iteration, a candidate of the diagnosis), as ema.fit. ema::Cancelled is no
+        // std::exception, so no step takes it for its own failure and the run goes no further (a
+        // KeyboardInterrupt thrown inside a step was recorded as that step's error and the run went on).
+        const ema::pipeline::RunResult run = RunInterruptibly(
+            [&](const ema::ProgressCallback& progress) { return ema::pipeline::Run(plan, progress); });
+        return FromJson(ema::pipeline::RunResultJson(run));
       },
       py::arg("project"), py::arg("output") = "ema-run",
       "The whole story of a project file, as `ema run` computes it: per test frf -> fit -> correlate with the\n"
@@ -1565,7 +1631,8 @@ PYBIND11_MODULE(_ema, m) {
       "'correlation_after' (`ema correlate --json`)}], 'diagnosis' (DIAG.json, as ema.diagnose), 'steps':\n"
       "[{'step', 'test', 'status' ('done', 'failed', 'skipped', 'given'), 'error'}], 'problems',\n"
       "'mean_agreement_pct_before', 'mean_mac_before', 'mean_agreement_pct_after', 'mean_mac_after'}; None where\n"
-      "a stage gave nothing (a failed step is in 'steps' with its error, as `ema run` reports it).");
+      "a stage gave nothing (a failed step is in 'steps' with its error, as `ema run` reports it).\n"
+      "Ctrl-C stops the run at its next step, record, order, iteration or candidate (KeyboardInterrupt).");
 
   const ema::planning::PlanOptions plan_defaults;
   m.def(

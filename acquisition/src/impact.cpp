@@ -5,8 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <atomic>
 #include <map>
 #include <thread>
+
+#include "ema/core/parallel.hpp"
 
 namespace ema::acquisition {
 
@@ -117,14 +120,21 @@ std::string ClippingReason(const std::vector<double>& x, double full_scale, doub
   return t.Reason(full_scale, overload_fraction, flat_top_run);
 }
 
-ProcessedTest AnalyseImpacts(const HammerMeasurement& test, const ImpactOptions& opt) {
+ProcessedTest AnalyseImpacts(const HammerMeasurement& test, const ImpactOptions& opt,
+                             const ProgressCallback& progress) {
   ProcessedTest out;
+  // Progress: the share of records (force and responses) analysed, one call at a time from the
+  // worker threads; a call that throws (a cancellation) stops every worker at its next record.
+  std::size_t records_total = 0;
+  for (const Impact& imp : test.impacts) records_total += 1 + imp.responses.size();
+  StepProgress records_progress(progress, "impacts", records_total);
+  auto record_done = [&] { records_progress.Step(); };
   const double dt = test.sample_interval_s;
   const int n = test.samples;
   out.impacts.resize(test.impacts.size());
   // Each impact is analysed on its own (it writes only out.impacts[k]), so the impacts are shared
   // out over the cores: this pass reads every sample of the test once and is memory bound.
-  auto analyse_impact = [&](size_t k) {
+  auto analyse_impact = [&](size_t k, const std::atomic<bool>& stop) {
     const Impact& imp = test.impacts[k];
     ImpactAnalysis& a = out.impacts[k];
     const std::vector<double>& f = test.records[imp.force].samples;
@@ -191,7 +201,9 @@ ProcessedTest AnalyseImpacts(const HammerMeasurement& test, const ImpactOptions&
     // Responses: DC from the pre-trigger, clipping, motion before the impact, end level.
     pre_end = std::max(0, trig - 1);
     const int tail = std::max(4, n / 20);
+    record_done();
     for (int idx : imp.responses) {
+      if (stop.load(std::memory_order_relaxed)) return;
       const TimeRecord& r = test.records[idx];
       const std::vector<double>& x = r.samples;
       const double dc = Mean(x, 0, pre_end);
@@ -234,28 +246,38 @@ ProcessedTest AnalyseImpacts(const HammerMeasurement& test, const ImpactOptions&
       a.response_dc.push_back(dc);
       a.response_end_level.push_back(ref_amp > 0.0 ? end_amp / ref_amp : 0.0);
       a.response_rejections.push_back(why);
+      record_done();
     }
   };
-  const size_t threads = std::min<size_t>(test.impacts.size(), std::max(1u, std::thread::hardware_concurrency()));
-  std::vector<std::thread> pool;
-  for (size_t t = 1; t < threads; ++t)
-    pool.emplace_back([&, t] {
-      for (size_t k = t; k < test.impacts.size(); k += threads) analyse_impact(k);
-    });
-  for (size_t k = 0; k < test.impacts.size(); k += std::max<size_t>(threads, 1)) analyse_impact(k);
-  for (std::thread& th : pool) th.join();
+  const size_t threads =
+      std::max<size_t>(1, std::min<size_t>(test.impacts.size(), std::max(1u, std::thread::hardware_concurrency())));
+  RunOnThreads(static_cast<int>(threads), [&](int t, const std::atomic<bool>& stop) {
+    for (size_t k = static_cast<size_t>(t); k < test.impacts.size(); k += threads) {
+      if (stop.load(std::memory_order_relaxed)) return;
+      analyse_impact(k, stop);
+    }
+  });
   // Impact-level spread: peak force against the median of its point (per set and reference).
   std::map<std::pair<int, Dof>, std::vector<double>> levels;
   for (size_t k = 0; k < test.impacts.size(); ++k)
     if (out.impacts[k].accepted)
       levels[{test.impacts[k].set, test.impacts[k].reference}].push_back(std::abs(out.impacts[k].force_peak));
+  // The median of each point once (a test of thousands of impacts at one point took seconds when
+  // it was taken again for every impact); NaN: fewer than three levels, a median of two says nothing.
+  std::map<std::pair<int, Dof>, double> median_of;
+  for (auto& [point, v] : levels) {
+    if (v.size() < 3) {
+      median_of[point] = kNaN;
+      continue;
+    }
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    median_of[point] = v[v.size() / 2];
+  }
   for (size_t k = 0; k < test.impacts.size(); ++k) {
     ImpactAnalysis& a = out.impacts[k];
     if (!a.accepted) continue;
-    std::vector<double> v = levels[{test.impacts[k].set, test.impacts[k].reference}];
-    if (v.size() < 3) continue;  // a median of two says nothing
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    const double median = v[v.size() / 2];
+    const double median = median_of.at({test.impacts[k].set, test.impacts[k].reference});
+    if (std::isnan(median)) continue;
     const double dev = (std::abs(a.force_peak) - median) / median;
     if (std::abs(dev) > opt.level_tolerance) {
       a.accepted = false;

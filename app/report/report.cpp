@@ -223,6 +223,7 @@ json BuildReportData(const ReportInput& input) {
   if (!input.amplitude.is_null()) data["amplitude"] = input.amplitude;
   data["diagnosed_places"] = input.diagnosed_places.is_null() ? json::array() : input.diagnosed_places;
   data["history"] = input.history.is_null() ? json::array() : input.history;
+  data["next_test"] = input.next_test;
   json setups = json::array();
   for (const SetupResults& setup : input.setups) {
     // The fit's modes as `ema fit --json` writes them (the mode table, the quality section).
@@ -287,6 +288,30 @@ ReportInput ReportInputOf(const pipeline::RunResult& run, const RunPage& page) {
   input.diagnosed_places = run.diagnosis && run.nominal
                                ? DiagnosedPlaces(*run.nominal, run.diagnosis->diagnosis.candidates.front().effects)
                                : json::array();
+  if (run.next_test) {
+    const pipeline::NextTest& next = *run.next_test;
+    auto dof = [](const Dof& d) { return json{{"node", d.node}, {"dir", DirectionName(d.direction)}}; };
+    json sets = json::array();
+    for (const std::vector<Dof>& set : next.plan.sets) {
+      json list = json::array();
+      for (const Dof& d : set) list.push_back(dof(d));
+      sets.push_back(std::move(list));
+    }
+    json references = json::array();
+    for (const Dof& d : next.plan.references) references.push_back(dof(d));
+    json separations = json::array();
+    for (const planning::Separation& sep : next.plan.separations)
+      separations.push_back({{"a", sep.a}, {"b", sep.b}, {"sigma_before", sep.sigma_before}, {"sigma_after", sep.sigma_after}});
+    input.next_test = {{"test", project.tests[static_cast<std::size_t>(next.test)].name},
+                       {"readings", next.readings},
+                       {"sets", std::move(sets)},
+                       {"kept_sets", next.kept_sets},
+                       {"references", std::move(references)},
+                       {"separations", std::move(separations)},
+                       {"automac_max_offdiagonal", next.plan.automac_max_offdiagonal}};
+  } else if (!run.next_test_error.empty()) {
+    input.next_test = {{"error", run.next_test_error}};
+  }
   // Test points of the model's [[point]] entries given by position (points given by FE node have
   // none), for the animated shapes.
   std::vector<Node> geometry;

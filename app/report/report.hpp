@@ -70,6 +70,11 @@ struct ReportInput {
   /// OUTDIR/history.json (app::AppendRunHistory): the model versions of successive runs.
   nlohmann::json history;
   std::vector<std::string> problems;   ///< steps that failed or were skipped, shown in the page
+  /// When rank 1 has look-alikes, the test that tells them apart (pipeline::NextTest): {"test",
+  /// "readings", "sets": [[{"node", "dir"}, ...], ...] (the test's own first), "kept_sets",
+  /// "references": [{"node", "dir"}], "separations": [{"a", "b", "sigma_before", "sigma_after"}],
+  /// "automac_max_offdiagonal"}, or {"error"} when it could not be planned. Null: none.
+  nlohmann::json next_test;
 };
 
 /// What the page of a run shows beside its result: facts of the output folder.

@@ -355,20 +355,24 @@
     var geo = null;
     (data.setups || []).forEach(function (s) { if (!geo && s.shapes && s.shapes.nodes && s.shapes.nodes.length) geo = s.shapes; });
     var placed = places.filter(function (p) { return p.points && p.points.length; });
-    if (placed.length) {
+    // The test geometry (points and wireframe) under a figure's own markers.
+    var geometryTraces = function () {
       var traces = [];
-      if (geo) {
-        traces.push({ type: 'scatter3d', mode: 'markers', name: 'test points', x: geo.nodes.map(function (n) { return n.x; }),
-          y: geo.nodes.map(function (n) { return n.y; }), z: geo.nodes.map(function (n) { return n.z; }),
-          text: geo.nodes.map(function (n) { return 'node ' + n.id; }), hoverinfo: 'text', marker: { size: 3, color: '#777' } });
-        var lx = [], ly = [], lz = [];
-        (geo.lines || []).forEach(function (l) {
-          var a = geo.nodes[l[0]], b = geo.nodes[l[1]];
-          lx.push(a.x, b.x, null); ly.push(a.y, b.y, null); lz.push(a.z, b.z, null);
-        });
-        if (lx.length) traces.push({ type: 'scatter3d', mode: 'lines', name: 'wireframe', x: lx, y: ly, z: lz,
-          hoverinfo: 'skip', line: { color: '#bbb' } });
-      }
+      if (!geo) return traces;
+      traces.push({ type: 'scatter3d', mode: 'markers', name: 'test points', x: geo.nodes.map(function (n) { return n.x; }),
+        y: geo.nodes.map(function (n) { return n.y; }), z: geo.nodes.map(function (n) { return n.z; }),
+        text: geo.nodes.map(function (n) { return 'node ' + n.id; }), hoverinfo: 'text', marker: { size: 3, color: '#777' } });
+      var lx = [], ly = [], lz = [];
+      (geo.lines || []).forEach(function (l) {
+        var a = geo.nodes[l[0]], b = geo.nodes[l[1]];
+        lx.push(a.x, b.x, null); ly.push(a.y, b.y, null); lz.push(a.z, b.z, null);
+      });
+      if (lx.length) traces.push({ type: 'scatter3d', mode: 'lines', name: 'wireframe', x: lx, y: ly, z: lz,
+        hoverinfo: 'skip', line: { color: '#bbb' } });
+      return traces;
+    };
+    if (placed.length) {
+      var traces = geometryTraces();
       var colours = ['#b2182b', '#2166ac', '#1b7837'];
       placed.forEach(function (p, i) {
         traces.push({ type: 'scatter3d', mode: 'markers+text', name: p.kind + ' on ' + p.target,
@@ -380,6 +384,42 @@
       chart(story, traces, { height: 420, margin: { l: 0, r: 0, t: 10, b: 0 }, scene: { aspectmode: 'data' } }, 'half');
     } else {
       story.appendChild(el('p', { text: 'Rank 1 is "none" or acts on no located place: nothing to highlight.' }));
+    }
+    // The next test: where one more roving set and the hammer would tell rank 1's look-alikes apart
+    // (pipeline::NextTest, as `ema plan --candidates --keep` plans it).
+    var next = data.next_test;
+    if (next && next.error) {
+      story.appendChild(el('p', { 'class': 'note', text: 'The test that would tell rank 1\'s look-alikes apart could not be ' +
+        'planned: ' + next.error }));
+    } else if (next && next.sets) {
+      var sigma = function (v) { return v === null || v === undefined ? '–' : fmt(v, 1) + ' σ'; };
+      story.appendChild(el('h3', { text: 'The next test: where the sensors tell the look-alikes apart' }));
+      story.appendChild(el('p', { text: 'These data cannot separate ' + next.readings.join('; ') + '. One more roving set beside ' +
+        next.test + '\'s ' + next.kept_sets + ' (ema plan --candidates DIAG.json --keep) would: the predicted test results of ' +
+        'each pair of readings apart in units of the test\'s noise, now and with the new set.' }));
+      var pos = {};
+      if (geo) geo.nodes.forEach(function (n) { pos[n.id] = n; });
+      var marks = function (dofs, name, symbol, colour, size) {
+        var at = dofs.filter(function (d) { return pos[d.node]; });
+        return { type: 'scatter3d', mode: 'markers+text', name: name, x: at.map(function (d) { return pos[d.node].x; }),
+          y: at.map(function (d) { return pos[d.node].y; }), z: at.map(function (d) { return pos[d.node].z; }),
+          text: at.map(function (d) { return d.node + d.dir; }), textposition: 'top center',
+          marker: { size: size, symbol: symbol, color: colour } };
+      };
+      var kept = [], added = [];
+      next.sets.forEach(function (set, i) {
+        set.forEach(function (d) { (i < next.kept_sets ? kept : added).push(d); });
+      });
+      var nextTraces = geometryTraces();
+      nextTraces.push(marks(kept, 'sensors of the test', 'circle', '#999', 4));
+      nextTraces.push(marks(added, 'the new roving set', 'diamond', '#1b7837', 7));
+      nextTraces.push(marks(next.references || [], 'hammer', 'x', '#d95f02', 7));
+      if (geo) chart(story, nextTraces, { height: 420, margin: { l: 0, r: 0, t: 10, b: 0 }, scene: { aspectmode: 'data' } }, 'half');
+      story.appendChild(el('p', { text: 'New set: ' + added.map(function (d) { return d.node + d.dir; }).join(', ') +
+        '; hammer at ' + (next.references || []).map(function (d) { return d.node + d.dir; }).join(', ') + '.' }));
+      table(story, ['reading', 'against', 'apart with the test', 'with the new set'], (next.separations || []).map(function (p) {
+        return [p.a, p.b, sigma(p.sigma_before), sigma(p.sigma_after)];
+      }));
     }
     // A log axis over whole decades around the values (a flat series gets one decade each side).
     var decades = function (values) {

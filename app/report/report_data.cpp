@@ -126,18 +126,17 @@ bool Place(const model::Model& m, const model::Anchor& a, const model::Anchor* f
 json DiagnosedPlaces(const model::Model& m, const std::vector<model::Effect>& effects) {
   json out = json::array();
   for (const model::Effect& e : effects) {
-    const model::EffectKindInfo* info = model::FindEffectKind(e.kind);
-    if (!info) continue;
+    const model::EffectKindInfo& info = model::Info(e.kind);
     json points = json::array();
     auto add = [&](const Eigen::Vector3d& p) { points.push_back({p.x(), p.y(), p.z()}); };
     Eigen::Vector3d p;
-    if (info->target == model::EffectTarget::kSprings) {
+    if (info.target == model::EffectTarget::kSprings) {
       for (int i : model::TargetSprings(m, e.target)) {
         const model::Spring& s = m.springs[static_cast<std::size_t>(i)];
         if (Place(m, s.a, nullptr, &p)) add(p);
         if (!s.b.IsGround() && Place(m, s.b, &s.a, &p)) add(p);
       }
-    } else if (info->target == model::EffectTarget::kPoints) {
+    } else if (info.target == model::EffectTarget::kPoints) {
       std::vector<int> named;
       try {
         named = model::TargetPoints(m, e);
@@ -155,7 +154,7 @@ json DiagnosedPlaces(const model::Model& m, const std::vector<model::Effect>& ef
       if (member.Target() == e.target) label = member.name;
     for (const model::FePart& part : m.fe.parts)
       if (!part.group.empty() && part.group + "/" + part.name == e.target) label = part.name;
-    out.push_back({{"target", e.target}, {"kind", e.kind}, {"label", label}, {"points", points}});
+    out.push_back({{"target", e.target}, {"kind", model::KindName(e.kind)}, {"label", label}, {"points", points}});
   }
   return out;
 }
@@ -177,7 +176,7 @@ json DiagnosisView(const pipeline::DiagnoseStage& stage) {
   for (const pipeline::EffectFinding& e : f.effects) {
     diagnose::Candidate single;
     single.effects = {e.effect};
-    json j = {{"kind", e.effect.kind},
+    json j = {{"kind", model::KindName(e.effect.kind)},
               {"target", e.effect.target},
               {"description", diagnose::DescribeCandidate(single, false)},
               {"values", EffectValuesWords(e)},

@@ -42,10 +42,18 @@ std::string ParameterWords(const diagnose::FittedParameter& p, const model::Effe
     return with(1e-9, " GPa", "Hertz contact E' = ") +
            (std::isfinite(radius) ? " (R' = " + Significant(radius * 1e3) + " mm)" : "");
   }
-  if (p.effect_kind == "series_compliance" || p.effect_kind == "ground_spring") return with(1e-6, " N/µm", "k = ");
-  if (p.effect_kind == "added_mass") return with(1e3, " g per point", "");
-  if (p.effect_kind == "operating_point")
-    return std::abs(p.value) < 1e-3 ? with(1e6, " µm", "value = ") : with(1.0, "", "value = ");
+  switch (p.effect_kind) {
+    case model::EffectKind::kSeriesCompliance:
+    case model::EffectKind::kGroundSpring:
+      return with(1e-6, " N/µm", "k = ");
+    case model::EffectKind::kAddedMass:
+      return with(1e3, " g per point", "");
+    case model::EffectKind::kOperatingPoint:
+      return std::abs(p.value) < 1e-3 ? with(1e6, " µm", "value = ") : with(1.0, "", "value = ");
+    case model::EffectKind::kStiffnessScale:
+    case model::EffectKind::kMassScale:
+      break;
+  }
   return with(1.0, "", "factor ");
 }
 

@@ -46,7 +46,7 @@ constexpr double kNoisePoleChi2Floor = 25.0;
 // ML refinement of the selected poles (or, for --refine none, only their uncertainty). Updates the
 // poles (and, from the refined residues, the participation vectors) when the refinement is usable.
 bool RefineSelected(const FitData& data, const FitOptions& options, const std::string& source, FitResult* result,
-                    MlRefineResult* ml) {
+                    MlRefineResult* ml, const ProgressCallback& progress) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   MlRefineOptions mo = options.ml;
@@ -54,7 +54,7 @@ bool RefineSelected(const FitData& data, const FitOptions& options, const std::s
   mo.lower_residual = options.lsfd.lower_residual;
   mo.upper_residual = options.lsfd.upper_residual;
   try {
-    *ml = RefineModalModel(data, result->selected, mo);
+    *ml = RefineModalModel(data, result->selected, mo, progress);
   } catch (const InputError& e) {
     result->warnings.push_back(source + ": no ML refinement or uncertainty: " + e.what());
     return false;
@@ -96,7 +96,8 @@ struct PerSetRefinement {
   std::string why;  ///< when not usable
 };
 
-PerSetRefinement RefinePerSet(const FitData& data, const FitOptions& options, const std::vector<SelectedPole>& selected) {
+PerSetRefinement RefinePerSet(const FitData& data, const FitOptions& options, const std::vector<SelectedPole>& selected,
+                              const ProgressCallback& progress) {
   PerSetRefinement out;
   const std::vector<std::vector<int>> sets = data.SetOutputs();
   if (sets.size() < 2 || options.refine != RefineMethod::kMl || !options.per_set_poles) return out;
@@ -105,8 +106,13 @@ PerSetRefinement RefinePerSet(const FitData& data, const FitOptions& options, co
   mo.upper_residual = options.lsfd.upper_residual;
   for (size_t k = 0; k < sets.size(); ++k) {
     MlRefineResult r;
+    ProgressCallback set_progress;  // set k of K: (k + its share) / K
+    if (progress)
+      set_progress = [&progress, k, count = static_cast<double>(sets.size())](double f, std::string_view stage) {
+        progress((static_cast<double>(k) + f) / count, stage);
+      };
     try {
-      r = RefineModalModel(SubsetOutputs(data, sets[k]), selected, mo);
+      r = RefineModalModel(SubsetOutputs(data, sets[k]), selected, mo, set_progress);
     } catch (const InputError& e) {
       out.why = "roving set " + std::to_string(k + 1) + ": " + e.what();
       return out;
@@ -309,6 +315,12 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
   FitResult result;
   const FitData data = PrepareFitData(frfs, options.data, source);
   result.transposed = data.transposed;
+  // After the poles ("poles", 0..1): the refinement's iterations and a step before each LSFD, below 1
+  // until the fit is done (a bar ends its line at 1). Every step is also where a progress callback
+  // that throws (a cancellation) stops the fit.
+  ProgressCallback modes_progress;
+  if (progress)
+    modes_progress = [&progress](double f, std::string_view stage) { progress(std::min(f, 0.99), stage); };
   result.warnings = data.warnings;
   if (options.method == FitMethod::kPeak) {
     result.modes = PeakPick(data, options.peak);
@@ -340,17 +352,18 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
       for (;;) {
         const size_t warnings_before = result.warnings.size();
         MlRefineResult ml;
-        const PerSetRefinement per = RefinePerSet(data, options, result.selected);
+        const PerSetRefinement per = RefinePerSet(data, options, result.selected, modes_progress);
         bool have_ml = false;
         if (per.ok) {
           ApplyPerSet(per, &result);
         } else {
-          have_ml = RefineSelected(data, options, source, &result, &ml);
+          have_ml = RefineSelected(data, options, source, &result, &ml, modes_progress);
           if (!per.why.empty() && result.refine.IsSolutionUsable())
             result.warnings.push_back(source + ": one pole per mode for every roving set (" + per.why + ")");
         }
         const double t_lsfd = ThreadCpuSeconds();
-        LsfdResult lsfd = EstimateModeShapes(data, result.selected, options.lsfd, per.ok ? &per.poles : nullptr);
+        LsfdResult lsfd =
+            EstimateModeShapes(data, result.selected, options.lsfd, per.ok ? &per.poles : nullptr, modes_progress);
         if (per.ok) AttachSetFrequencies(per, lsfd);
         result.timing.lsfd += ThreadCpuSeconds() - t_lsfd;
         // Automatic selection only: a pole that is the same mode as a neighbour seen on other
@@ -425,6 +438,7 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
     const double t3 = ThreadCpuSeconds();
     result.timing.stabilisation_and_selection = t2 - t1;
     result.timing.refine = t3 - t2 - result.timing.lsfd;
+    ReportProgress(progress, 1.0, "modes");
   }
   result.modes.source = source;
   result.timing.total = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ema/core/error.hpp"
+#include "ema/core/parallel.hpp"
 
 namespace ema::curvefit {
 
@@ -103,13 +104,9 @@ FitData PrepareFitData(const FrfSet& frfs, const FitDataOptions& options, const 
   const bool big = static_cast<double>(n) * columns >= double{1 << 22};
   const int threads = big ? std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 4) : 1;
   std::vector<std::vector<char>> line_finite_of(static_cast<size_t>(threads), std::vector<char>(static_cast<size_t>(n), 1));
-  {
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t)
-      pool.emplace_back(copy_columns, columns * t / threads, columns * (t + 1) / threads, &line_finite_of[t]);
-    copy_columns(0, columns / threads, &line_finite_of[0]);
-    for (auto& th : pool) th.join();
-  }
+  RunOnThreads(threads, [&](int t, const std::atomic<bool>&) {
+    copy_columns(columns * t / threads, columns * (t + 1) / threads, &line_finite_of[t]);
+  });
   for (int c = 0; c < columns; ++c) {
     if (!column_finite[c]) {
       const int o = c / m, i = c % m;

@@ -14,7 +14,7 @@ namespace ema::curvefit {
 using cd = std::complex<double>;
 
 LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPole>& poles, const LsfdOptions& options,
-                              const SetPoles* set_poles) {
+                              const SetPoles* set_poles, const ProgressCallback& progress) {
   const int n = data.LineCount(), l = data.OutputCount(), m = data.ReferenceCount();
   const int nm = static_cast<int>(poles.size());
   const int n_res = (options.lower_residual ? m : 0) + (options.upper_residual ? m : 0);
@@ -39,7 +39,12 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
   }
   Eigen::MatrixXd X(n_unk, l);
   double err2 = 0.0, ref2 = 0.0;
+  // Three steps per group (design, solve, residual): the share done, to `progress`.
+  const auto step = [&](size_t g, int part) {
+    ReportProgress(progress, (static_cast<double>(g) + part / 3.0) / static_cast<double>(groups.size()), "mode shapes");
+  };
   for (size_t g = 0; g < groups.size(); ++g) {
+  step(g, 0);
   const std::vector<int>& outs = groups[g];
   // Design matrix, rows (line, reference, re/im); identical for every output of the group (no
   // per-output weights), so one QR serves them all.
@@ -80,6 +85,7 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
         B(2 * (f * m + i), k) = h.real();
         B(2 * (f * m + i) + 1, k) = h.imag();
       }
+  step(g, 1);
   // Normal equations of the column-scaled design (unit-norm columns keep cond(P^T P) modest);
   // QR when the Cholesky factor shows rank trouble.
   Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(n_unk, n_unk);
@@ -92,12 +98,14 @@ LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPol
   } else {
     Xg = Eigen::HouseholderQR<Eigen::MatrixXd>(P).solve(B);
   }
+  step(g, 2);
   err2 += (P * Xg - B).squaredNorm();
   ref2 += B.squaredNorm();
   Xg = scale.asDiagonal() * Xg;
   for (int k = 0; k < lg; ++k) X.col(outs[static_cast<size_t>(k)]) = Xg.col(k);
   }
   const double err = std::sqrt(err2), ref = std::sqrt(ref2);
+  ReportProgress(progress, 1.0, "mode shapes");
 
   LsfdResult result;
   result.synthesis_error = ref > 0.0 ? err / ref : 0.0;

@@ -28,6 +28,7 @@
 #include <thread>
 
 #include "ema/core/error.hpp"
+#include "ema/core/parallel.hpp"
 #include "ema/curvefit/polymax.hpp"
 
 namespace ema::curvefit {
@@ -35,6 +36,37 @@ namespace ema::curvefit {
 namespace {
 
 using cd = std::complex<double>;
+
+// The refinement's progress, and where a progress callback that throws (a cancellation) stops it.
+// Every report comes from the calling thread (Ceres runs on it: num_threads = 1): after each
+// iteration the share of the iteration limit, and between the expensive parts of each evaluation
+// the last share again. What the callback throws is kept: the evaluation then fails and the
+// iteration callback aborts the solve, so that no exception crosses Ceres' own frames, and it is
+// rethrown once Ceres has returned (RethrowIfThrown).
+class RefineProgress {
+ public:
+  explicit RefineProgress(const ProgressCallback& progress) : progress_(progress) {}
+  /// Reports `fraction` (< 0: the last one again); true once the callback has thrown.
+  bool Report(double fraction = -1.0) {
+    if (thrown_) return true;
+    if (!progress_) return false;
+    if (fraction >= 0.0) fraction_ = fraction;
+    try {
+      progress_(fraction_, "ML refinement");
+    } catch (...) {
+      thrown_ = std::current_exception();
+    }
+    return static_cast<bool>(thrown_);
+  }
+  void RethrowIfThrown() const {
+    if (thrown_) std::rethrow_exception(thrown_);
+  }
+
+ private:
+  const ProgressCallback& progress_;
+  double fraction_ = 0.0;
+  std::exception_ptr thrown_;
+};
 
 // Everything that does not change between evaluations.
 struct Problem {
@@ -50,6 +82,7 @@ struct Problem {
   Eigen::MatrixXd hh;                   // S × n_frf: sum |h|^2 per segment
   Eigen::MatrixXd w;                    // S × n_frf: weights 2/sigma^2
   int threads = 1;
+  RefineProgress* progress = nullptr;   // asked between the parts of an evaluation
 
   int Segments() const { return static_cast<int>(seg_start.size()) - 1; }
 };
@@ -115,6 +148,7 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
   std::vector<Eigen::MatrixXd> basis;
   Eigen::VectorXd scale;
   BuildBasis(pr, lambda, want_jacobian, &basis, &scale);
+  if (pr.progress && pr.progress->Report()) return ev;  // cancelled: not ok
   std::vector<Eigen::MatrixXd> gram(S), proj(S);
   for (int s = 0; s < S; ++s) {
     gram[s] = Eigen::MatrixXd::Zero(cols, cols);
@@ -122,6 +156,7 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
     gram[s].triangularView<Eigen::StrictlyUpper>() = gram[s].transpose();
     proj[s].resize(cols, pr.n_frf);  // filled per thread block below: basis^T × data
   }
+  if (pr.progress && pr.progress->Report()) return ev;
   ev.x.resize(p, pr.n_frf);
   if (want_std) ev.x_std.resize(p, pr.n_frf);
   ev.frf_sse.resize(pr.n_frf);
@@ -130,7 +165,7 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
   std::vector<Eigen::VectorXd> jtr(threads, Eigen::VectorXd::Zero(2 * nm));
   std::vector<double> cost(threads, 0.0);
   std::vector<int> failed(threads, 0);
-  auto work = [&](int t) {
+  auto work = [&](int t, const std::atomic<bool>& stop) {
     // Contiguous FRF block per thread: its share of the data products is one GEMM per segment.
     const int c0 = static_cast<int>(static_cast<long long>(t) * pr.n_frf / threads);
     const int c1 = static_cast<int>(static_cast<long long>(t + 1) * pr.n_frf / threads);
@@ -138,7 +173,7 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
       proj[s].middleCols(c0, c1 - c0).noalias() = basis[s].transpose() * pr.h_real[s].middleCols(c0, c1 - c0);
     Eigen::MatrixXd gw(cols, cols), m_mix = Eigen::MatrixXd::Zero(2 * nm, 2 * nm);
     Eigen::VectorXd vw(cols);
-    for (int c = c0; c < c1; ++c) {
+    for (int c = c0; c < c1 && !stop.load(std::memory_order_relaxed); ++c) {
       gw.setZero();
       vw.setZero();
       double hhw = 0.0, hh = 0.0;
@@ -191,14 +226,7 @@ Evaluation EvaluateModel(const Problem& pr, const std::vector<cd>& lambda, bool 
       jtr[t].noalias() -= factor * (m_mix.transpose() * de);
     }
   };
-  if (threads == 1) {
-    work(0);
-  } else {
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
-    work(0);
-    for (auto& th : pool) th.join();
-  }
+  RunOnThreads(threads, work);
   for (int t = 0; t < threads; ++t) {
     if (failed[t]) return ev;
     ev.cost += cost[t];
@@ -286,6 +314,23 @@ struct PoleBox {
   double re_lo, re_hi, im_lo, im_hi;
 };
 
+// After each Levenberg-Marquardt iteration: the share of the iteration limit used; aborts the solve
+// once the progress callback has thrown (in an evaluation of this iteration, or now).
+class ProgressEachIteration : public ceres::IterationCallback {
+ public:
+  ProgressEachIteration(RefineProgress* progress, int max_iterations)
+      : progress_(progress), max_iterations_(std::max(1, max_iterations)) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    return progress_->Report(std::min(1.0, static_cast<double>(summary.iteration) / max_iterations_))
+               ? ceres::SOLVER_ABORT
+               : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  RefineProgress* progress_;
+  int max_iterations_;
+};
+
 SolveOutcome SolveWithCeres(const Problem& pr, const MlRefineOptions& options, const std::vector<PoleBox>& boxes,
                             std::vector<cd>* lambda) {
   const int nm = pr.n_modes;
@@ -315,8 +360,11 @@ SolveOutcome SolveWithCeres(const Problem& pr, const MlRefineOptions& options, c
   solver.logging_type = ceres::SILENT;
   solver.minimizer_progress_to_stdout = false;
   QuietSolverLogging();
+  ProgressEachIteration each_iteration(pr.progress, options.max_iterations);
+  if (pr.progress) solver.callbacks.push_back(&each_iteration);
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
+  if (pr.progress) pr.progress->RethrowIfThrown();
   SolveOutcome out;
   out.iterations = static_cast<int>(summary.iterations.size());
   out.initial_cost = 2.0 * summary.initial_cost;
@@ -393,9 +441,11 @@ void PoleStdToFrequencyAndDamping(std::complex<double> lambda, const Eigen::Matr
 }
 
 MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedPole>& poles,
-                                const MlRefineOptions& options) {
+                                const MlRefineOptions& options, const ProgressCallback& progress) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("MlRefineOptions: " + why);
+  RefineProgress refine_progress(progress);
+  if (refine_progress.Report(0.0)) refine_progress.RethrowIfThrown();
   const double t0 = ThreadCpuSeconds();
   const int nm = static_cast<int>(poles.size());
   const int l = data.OutputCount(), m = data.ReferenceCount(), n_frf = l * m;
@@ -422,6 +472,7 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
   pr.p = 2 * nm + (pr.lower ? 1 : 0) + (pr.upper ? 1 : 0);
   pr.k_pow = data.frf_type == FrfType::kReceptance ? 0 : data.frf_type == FrfType::kMobility ? 1 : 2;
   pr.threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  if (progress) pr.progress = &refine_progress;
   std::vector<int> used;
   for (int k = 0; k < data.LineCount(); ++k)
     if (data.line_weight[k] != 0.0) used.push_back(k);
@@ -506,6 +557,7 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
   } else {
     pr.w = Eigen::MatrixXd::Ones(1, n_frf);
     const Evaluation first = EvaluateModel(pr, lambda0, false);
+    refine_progress.RethrowIfThrown();
     if (!first.ok) {
       result.summary.termination = RefineTermination::kFailed;
       result.summary.message = "singular residue problem at the PolyMAX poles";
@@ -585,6 +637,7 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
 
   // Final evaluation: residues, their sigma, and the Fisher information of the poles.
   const Evaluation fin = EvaluateModel(pr, lambda, true, true, reweight && plausible);
+  refine_progress.RethrowIfThrown();
   result.summary.final_cost = fin.ok ? fin.cost : kNaN;
   if (!std::isfinite(result.summary.initial_cost)) result.summary.initial_cost = result.summary.final_cost;
   const double dof = 2.0 * pr.n * n_frf - (static_cast<double>(pr.p) * n_frf + 2.0 * nm);
@@ -631,6 +684,8 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
     }
   }
   result.summary.seconds = ThreadCpuSeconds() - t0;
+  refine_progress.Report(1.0);
+  refine_progress.RethrowIfThrown();
   return result;
 }
 

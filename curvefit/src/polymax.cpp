@@ -15,6 +15,7 @@
 #include <time.h>
 
 #include "ema/core/error.hpp"
+#include "ema/core/parallel.hpp"
 #include "ema/frf/fft.hpp"
 
 namespace ema::curvefit {
@@ -309,15 +310,23 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
     for (int i = 0; i < m; ++i)
       hw.col(o * m + i) = data.h.col(o * m + i).cwiseProduct(data.line_weight) * data.output_weight[o];
 
+  // The normal equations report no share (0 until the first order is done), but each FRF's step
+  // asks the callback: one that throws (a cancellation) stops a big set's normal equations too.
+  const auto step = [&progress] { ReportProgress(progress, 0.0, "poles"); };
   Eigen::VectorXcd r_lag;
   std::vector<Eigen::VectorXcd> s_lag(l * m);     // per (o, i)
   std::vector<Eigen::VectorXcd> t_lag(m * m);     // summed over outputs, per (i, j)
   {
+    step();
     LagSums lags(n_fft, n, kTwoPi * f0 * dt);
     lags.Compute(data.line_weight.cast<std::complex<double>>(), P, &r_lag);
-    for (int c = 0; c < l * m; ++c) lags.Compute(hw.col(c), P, &s_lag[c]);
+    for (int c = 0; c < l * m; ++c) {
+      step();
+      lags.Compute(hw.col(c), P, &s_lag[c]);
+    }
     for (int i = 0; i < m; ++i)
       for (int j = i; j < m; ++j) {
+        step();
         Eigen::VectorXcd x = Eigen::VectorXcd::Zero(n);
         for (int o = 0; o < l; ++o) x += hw.col(o * m + i).conjugate().cwiseProduct(hw.col(o * m + j));
         lags.Compute(x, P, &t_lag[i * m + j]);
@@ -353,6 +362,7 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
   {
     Eigen::MatrixXd s(P + 1, nc);
     for (int o = 0; o < l; ++o) {
+      step();
       for (int a = 0; a <= P; ++a)
         for (int b = 0; b <= P; ++b)
           for (int i = 0; i < m; ++i) s(a, b * m + i) = -s_lag[o * m + i][b - a + lag0].real();
@@ -371,6 +381,7 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
   {
     Eigen::MatrixXd G = Eigen::MatrixXd::Zero(nc, nc);
     for (int c = 0; c <= P; ++c) {
+      step();
       G.selfadjointView<Eigen::Lower>().rankUpdate(zrows[c].transpose());
       if (c >= order_min) {
         const int k = m * (c + 1);
@@ -399,8 +410,8 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
   solve_time.assign(n_threads, 0.0);
   eig_time.assign(n_threads, 0.0);
   const double band_lo = diagram.band_lo_hz, band_hi = diagram.band_hi_hz;
-  auto worker = [&](int tid) {
-    for (;;) {
+  auto worker = [&](int tid, const std::atomic<bool>& stop) {
+    while (!stop.load(std::memory_order_relaxed)) {
       // Largest orders first: better load balance.
       const int idx = next.fetch_add(1);
       if (idx >= n_orders) break;
@@ -470,10 +481,10 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
       }
     }
   };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < n_threads; ++t) pool.emplace_back(worker, t);
-  worker(0);
-  for (auto& th : pool) th.join();
+  // A progress callback that throws (a cancellation) stops every worker at its next order and
+  // reaches the caller.
+  step();
+  RunOnThreads(n_threads, worker);
   const auto t2 = Clock::now();
   if (timing) {
     timing->normal_equations = cpu1 - cpu0;

@@ -67,16 +67,15 @@ struct SpringSet {
 
 double PriorSigma(const model::Model& m, EffectKind kind, double item_sigma) {
   if (std::isfinite(item_sigma)) return item_sigma;
-  const model::EffectKindInfo& info = model::Info(kind);
-  const auto it = m.priors.find(info.name);
-  return it != m.priors.end() ? it->second : info.prior_sigma;
+  const auto it = m.priors.find(kind);
+  return it != m.priors.end() ? it->second : model::Info(kind).prior_sigma;
 }
 
 Atom MakeAtom(const model::Model& m, EffectKind kind, const std::string& target, double ref, double item_sigma) {
   const model::EffectKindInfo& info = model::Info(kind);
   Atom a;
   a.info = &info;
-  a.effect = model::Effect{info.name, target, {}, std::nullopt, 0};
+  a.effect = model::Effect{kind, target, {}, std::nullopt, 0};
   const auto slash = target.find('/');
   if (info.target == model::EffectTarget::kPoints) a.words = target == "all_points" ? "all points" : "point " + target.substr(7);
   else if (info.target == model::EffectTarget::kBody) a.words = "body '" + target + "'";
@@ -165,7 +164,7 @@ model::Effect Atom::With(double theta) const {
 }
 
 std::string Atom::Label() const {
-  return effect.kind + (hertz ? " (hertz)" : "") + " of '" + effect.target + "'";
+  return model::KindName(effect.kind) + (hertz ? " (hertz)" : "") + " of '" + effect.target + "'";
 }
 
 std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& options) {

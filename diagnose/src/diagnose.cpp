@@ -344,7 +344,7 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
   for (const detail::Fit& f : search.fits) all.push_back(detail::MakeCandidate(&problem, f, none.cost));
   detail::Rank(&all, none);
   for (const Candidate& c : all)
-    if (c.kind == "none") result.baseline = c;
+    if (c.IsNone()) result.baseline = c;
   result.effect_probabilities = EffectProbabilities(all);
   result.groups = GroupCandidates(all);
 

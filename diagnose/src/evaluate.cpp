@@ -142,7 +142,8 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
   // the rest again.
   bool rest_changed = false;
   for (const auto& e : effects)
-    if (!((e.kind == "stiffness_scale" || e.kind == "mass_scale") && model::TargetSprings(r.skeleton, e.target).empty() &&
+    if (!((e.kind == model::EffectKind::kStiffnessScale || e.kind == model::EffectKind::kMassScale) &&
+          model::TargetSprings(r.skeleton, e.target).empty() &&
           !r.skeleton.FindBody(e.target) && !model::TargetParts(r.skeleton, e.target).empty()))
       rest_changed = true;
   return Compare([&](std::size_t s, const std::vector<model::PointMass>& sensors) {

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <set>
@@ -18,8 +19,8 @@ std::string CandidateLabel(const Candidate& c) {
   if (c.effects.empty()) return c.kind;
   std::vector<std::string> parts;
   for (const model::Effect& e : c.effects) {
-    std::string label = e.kind;
-    if (e.kind == "series_compliance" && e.law) label += " (" + e.law->KindName() + ")";
+    std::string label = model::KindName(e.kind);
+    if (e.kind == model::EffectKind::kSeriesCompliance && e.law) label += " (" + e.law->KindName() + ")";
     parts.push_back(label + " of '" + e.target + "'");
   }
   return Join(parts, " + ");
@@ -44,6 +45,15 @@ bool Nested(const Candidate& a, const Candidate& b) {
     return true;
   };
   return contains(a, b) || contains(b, a);
+}
+
+// True when two candidates hold the same effects (kind and target, in order), whatever their
+// values or laws: variants of one reading.
+bool SameReading(const Candidate& a, const Candidate& b) {
+  if (a.effects.size() != b.effects.size()) return false;
+  for (size_t i = 0; i < a.effects.size(); ++i)
+    if (a.effects[i].kind != b.effects[i].kind || a.effects[i].target != b.effects[i].target) return false;
+  return true;
 }
 
 // "the stiffness of member 'J3' of group 'joints' is 50× lower than modelled (7.8σ of its stated
@@ -106,7 +116,7 @@ Candidate MakeCandidate(Problem* p, const Fit& f, double baseline_cost) {
   const auto& atoms = p->Atoms();
   std::vector<std::string> kinds, targets;
   for (int a : f.atoms) {
-    kinds.push_back(atoms[a].effect.kind);
+    kinds.push_back(model::KindName(atoms[a].effect.kind));
     targets.push_back(atoms[a].effect.target);
   }
   c.kind = f.atoms.empty() ? "none" : Join(kinds, "+");
@@ -207,7 +217,8 @@ void Rank(std::vector<Candidate>* all, const Candidate& none) {
     });
     if (plausible == all->end()) break;
     first.flags.push_back("it needs a value far outside its stated uncertainty and still leaves the model inadequate: "
-                          "listed below " + (plausible->kind == "none" ? std::string("the model as given") : CandidateLabel(*plausible)) +
+                          "listed below " +
+                          (plausible->IsNone() ? std::string("the model as given") : CandidateLabel(*plausible)) +
                           ", a plausible reading that fits about as well");
     std::rotate(all->begin(), plausible, plausible + 1);
   }
@@ -217,11 +228,11 @@ void Rank(std::vector<Candidate>* all, const Candidate& none) {
   const int top = std::min<int>(6, all->size());
   for (int a = 0; a < top; ++a) {
     Candidate& ca = (*all)[a];
-    if (ca.kind == "none" || !ca.error.empty()) continue;
+    if (ca.IsNone() || !ca.error.empty()) continue;
     const Eigen::VectorXd da = ca.residuals - none.residuals;
     for (int b = 0; b < top; ++b) {
       const Candidate& cb = (*all)[b];
-      if (a == b || cb.kind == "none" || !cb.error.empty()) continue;
+      if (a == b || cb.IsNone() || !cb.error.empty()) continue;
       // A set and its own extension (one more effect at a neutral value) are not rival readings.
       if (Nested(ca, cb)) continue;
       const Eigen::VectorXd db = cb.residuals - none.residuals;
@@ -238,14 +249,14 @@ std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
   const Candidate& first = all.front();
   auto pct = [](double v) { return FormatNumber(v, v < 10.0 ? 2 : 3) + " %"; };
   auto prob = [](double p) { return FormatNumber(100.0 * p, p > 0.999 ? 4 : 3) + " %"; };
-  if (first.kind == "none") {
+  if (first.IsNone()) {
     words << "No candidate effect explains the mismatch by more than its prior and parameter cost (probability "
           << prob(first.probability) << "): the model as given agrees to a mean frequency error of "
           << pct(none.mean_abs_frequency_error_pct) << " (mean MAC " << FormatNumber(none.mean_mac, 3) << ").";
     // The effect that fits best (lowest misfit), whatever its probability.
     const Candidate* closest = nullptr;
     for (const Candidate& c : all)
-      if (c.kind != "none" && c.error.empty() && c.plausible && (!closest || c.cost < closest->cost)) closest = &c;
+      if (!c.IsNone() && c.error.empty() && c.plausible && (!closest || c.cost < closest->cost)) closest = &c;
     if (closest && closest->cost < none.cost)
       words << " The effect that fits best, " << DescribeCandidate(*closest) << ", brings the misfit from "
             << FormatNumber(none.cost, 3) << " to " << FormatNumber(closest->cost, 3) << " σ² over "
@@ -261,7 +272,7 @@ std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
   for (size_t i = 1; i < all.size(); ++i) {
     const Candidate& c = all[i];
     // The next best *other* explanation: not a variant (another law) of the same one.
-    if (c.kind == "none" || !c.error.empty() || (c.kind == first.kind && c.target == first.target)) continue;
+    if (c.IsNone() || !c.error.empty() || SameReading(c, first)) continue;
     words << "; the next best, " << CandidateLabel(c) << " (probability " << prob(c.probability) << "), leaves "
           << pct(c.mean_abs_frequency_error_pct);
     break;
@@ -275,7 +286,7 @@ std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
     std::vector<std::string> parts;
     for (const EffectProbability& e : EffectProbabilities(all)) {
       if (parts.size() == 3) break;
-      parts.push_back(e.kind + " on " + e.target + " " + prob(e.probability));
+      parts.push_back(model::KindName(e.kind) + " on " + e.target + " " + prob(e.probability));
     }
     if (!parts.empty()) words << " Summed over the candidates that hold it: " << Join(parts, ", ") << ".";
   }
@@ -294,12 +305,27 @@ std::string EffectWildcard(const std::string& target) {
   return target;
 }
 
+namespace {
+
+// An effect's kind and target, ordered by the kind's name and then the target: effects of equal
+// probability keep the order they have always had in DIAG.json.
+struct EffectKey {
+  model::EffectKind kind;
+  std::string target;
+  bool operator<(const EffectKey& other) const {
+    const int by_name = std::strcmp(model::Info(kind).name, model::Info(other.kind).name);
+    return by_name != 0 ? by_name < 0 : target < other.target;
+  }
+};
+
+}  // namespace
+
 std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>& ranked) {
-  std::map<std::pair<std::string, std::string>, double> sums;
+  std::map<EffectKey, double> sums;
   for (const Candidate& c : ranked) {
     if (!c.error.empty() || !(c.probability > 0.0)) continue;
     // Each key counts a candidate once, even when it holds two members of one group.
-    std::set<std::pair<std::string, std::string>> keys;
+    std::set<EffectKey> keys;
     for (const model::Effect& e : c.effects) {
       keys.insert({e.kind, e.target});
       keys.insert({e.kind, EffectWildcard(e.target)});
@@ -308,7 +334,7 @@ std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>&
   }
   std::vector<EffectProbability> out;
   for (const auto& [key, p] : sums)
-    if (p >= 0.01) out.push_back({key.first, key.second, std::min(1.0, p)});
+    if (p >= 0.01) out.push_back({key.kind, key.target, std::min(1.0, p)});
   std::stable_sort(out.begin(), out.end(), [](const EffectProbability& a, const EffectProbability& b) {
     return a.probability > b.probability;
   });
@@ -317,15 +343,18 @@ std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>&
 
 std::vector<CandidateGroup> GroupCandidates(const std::vector<Candidate>& ranked) {
   std::vector<CandidateGroup> groups;
-  std::map<std::string, size_t> index;
+  // One group per sequence of kinds on the same wildcard targets.
+  std::map<std::pair<std::vector<model::EffectKind>, std::vector<std::string>>, size_t> index;
   for (const Candidate& c : ranked) {
     if (!c.error.empty()) continue;
+    std::vector<model::EffectKind> kinds;
     std::vector<std::string> targets;
-    for (const model::Effect& e : c.effects) targets.push_back(EffectWildcard(e.target));
-    const std::string target = Join(targets, "+");
-    const std::string key = c.kind + "|" + target;
-    auto [it, fresh] = index.emplace(key, groups.size());
-    if (fresh) groups.push_back({c.kind, target, {}, 0.0});
+    for (const model::Effect& e : c.effects) {
+      kinds.push_back(e.kind);
+      targets.push_back(EffectWildcard(e.target));
+    }
+    auto [it, fresh] = index.emplace(std::make_pair(kinds, targets), groups.size());
+    if (fresh) groups.push_back({c.kind, Join(targets, "+"), {}, 0.0});
     CandidateGroup& g = groups[it->second];
     g.ranks.push_back(c.rank);
     g.probability += std::isfinite(c.probability) ? c.probability : 0.0;
@@ -342,11 +371,8 @@ std::string DescribeCandidate(const Candidate& c, bool with_law_values) {
       return it == e.parameters.end() ? kNaN : it->second;
     };
     const model::HertzLaw* hertz = e.law ? std::get_if<model::HertzLaw>(&e.law->value) : nullptr;
-    const model::EffectKindInfo* info = model::FindEffectKind(e.kind);
-    const model::EffectKind kind = info ? info->kind : model::EffectKind::kStiffnessScale;
-    if (!info) {
-      parts.push_back(model::Describe(e));
-    } else if (kind == model::EffectKind::kSeriesCompliance && hertz) {
+    const model::EffectKind kind = e.kind;
+    if (kind == model::EffectKind::kSeriesCompliance && hertz) {
       parts.push_back(with_law_values ? "a Hertz contact (E' = " + FormatNumber(hertz->modulus, 3) + " Pa, R' = " +
                                             FormatNumber(hertz->radius * 1e3, 3) + " mm) in series with " +
                                             detail::Where(e.target)
@@ -376,10 +402,10 @@ std::string DescribeCandidate(const Candidate& c, bool with_law_values) {
 
 std::vector<std::string> ParameterKeys(const Candidate& c) {
   std::map<std::string, int> count;
-  for (const auto& p : c.parameters) ++count[p.effect_kind + "." + p.name];
+  for (const auto& p : c.parameters) ++count[model::KindName(p.effect_kind) + "." + p.name];
   std::vector<std::string> keys;
   for (const auto& p : c.parameters) {
-    const std::string key = p.effect_kind + "." + p.name;
+    const std::string key = model::KindName(p.effect_kind) + "." + p.name;
     if (c.effects.size() <= 1) keys.push_back(p.name);
     else if (count[key] == 1) keys.push_back(key);
     else keys.push_back(key + "[" + p.target + "]");

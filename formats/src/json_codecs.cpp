@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "ema/formats/model_file.hpp"
+#include "ema/model/effects.hpp"
 
 namespace ema::formats {
 
@@ -363,7 +364,7 @@ json CorrelationJson(const correlation::CorrelationResult& r, const ModeSet& tes
 }
 
 json EffectJson(const model::Effect& e) {
-  json out = {{"kind", e.kind}, {"target", e.target}, {"parameters", json::object()}};
+  json out = {{"kind", model::KindName(e.kind)}, {"target", e.target}, {"parameters", json::object()}};
   for (const auto& [k, v] : e.parameters) out["parameters"][k] = v;
   if (e.law) out["law"] = LawToToml(*e.law);
   return ValidUtf8(std::move(out));
@@ -457,7 +458,8 @@ json DiagnosisJson(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions
   out["explanation"] = d.explanation;
   out["effect_probabilities"] = json::array();
   for (const auto& e : d.effect_probabilities)
-    out["effect_probabilities"].push_back({{"kind", e.kind}, {"target", e.target}, {"probability", e.probability}});
+    out["effect_probabilities"].push_back(
+        {{"kind", model::KindName(e.kind)}, {"target", e.target}, {"probability", e.probability}});
   // Look-alike candidates folded into one row each (the same reading on another member or point).
   out["groups"] = json::array();
   for (const auto& g : d.groups)

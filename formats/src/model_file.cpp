@@ -449,7 +449,7 @@ class Reader : public TomlFields {
                                     "(3.0: a factor anywhere within about ×/÷ 400)");
           m.stiffness_fault_width = *v.value<double>();
         } else {
-          m.priors[key] = Uncertainty(v, "[priors] " + key);
+          m.priors[model::FindEffectKind(key)->kind] = Uncertainty(v, "[priors] " + key);  // a kind: CheckKeys said so
         }
       }
     }
@@ -585,11 +585,19 @@ class Reader : public TomlFields {
     CheckKeys(t, {"kind", "target", "law", "factor", "value", "mass", "k"}, "[[effect]]");
     model::Effect e;
     e.line = Line(t);
-    e.kind = String(Require(t, "kind", "[[effect]]"), "kind");
+    const std::string kind = String(Require(t, "kind", "[[effect]]"), "kind");
     e.target = String(Require(t, "target", "[[effect]]"), "target");
     for (const char* key : {"factor", "value", "mass", "k"})
       if (auto v = OptNumber(t, key)) e.parameters[key] = *v;
-    if (const toml::node* l = t.get("law")) e.law = ParseLaw(*l, "effect " + e.kind);
+    if (const toml::node* l = t.get("law")) e.law = ParseLaw(*l, "effect " + kind);
+    // The one place an effect's kind is read from text (DIAG.json's effects come through here too).
+    const model::EffectKindInfo* info = model::FindEffectKind(kind);
+    if (!info) {
+      std::string kinds;
+      for (const std::string& k : model::EffectKinds()) kinds += (kinds.empty() ? "" : ", ") + k;
+      throw InputError(At(t), "effect " + kind + " '" + e.target + "': unknown effect kind (allowed: " + kinds + ")");
+    }
+    e.kind = info->kind;
     return e;
   }
 
@@ -665,8 +673,9 @@ std::string LawToToml(const model::Law& law) {
 }
 
 std::string EffectToToml(const model::Effect& e) {
-  std::string s = "[[effect]]\nkind = " + TomlString(e.kind) + "\ntarget = " + TomlString(e.target) + "\n";
-  const bool k_as_law = e.kind == "series_compliance" && !e.law && e.parameters.count("k");
+  std::string s =
+      "[[effect]]\nkind = " + TomlString(model::KindName(e.kind)) + "\ntarget = " + TomlString(e.target) + "\n";
+  const bool k_as_law = e.kind == model::EffectKind::kSeriesCompliance && !e.law && e.parameters.count("k");
   for (const auto& [k, v] : e.parameters)
     if (!(k_as_law && k == "k")) s += k + " = " + Num(v) + "\n";
   if (e.law) s += "law = " + LawToToml(*e.law) + "\n";

@@ -57,7 +57,7 @@ std::vector<planning::Reading> LookAlikeReadings(const std::vector<DiagnosisRead
   if (!first) throw InputError(origin, "no candidate of rank 1; expected the `ema diagnose --json` of a diagnosis");
   const double p1 = first->probability;
   for (const auto& r : all) {
-    if (r.effects.empty() || r.kind == "none") continue;
+    if (r.effects.empty()) continue;  // the model as given
     const bool alike = r.rank == 1 || (r.probability >= 0.05 * p1 && r.probability >= 0.001);
     if (!alike) continue;
     out.push_back({r.kind + " on " + r.target, r.effects, origin + ", candidate rank " + std::to_string(r.rank)});

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "ema/core/error.hpp"
+#include "ema/core/parallel.hpp"
 #include "ema/frf/fft.hpp"
 
 namespace ema::frf {
@@ -18,7 +19,13 @@ using acquisition::ImpactAnalysis;
 
 FrfResult EstimateFrfs(const HammerMeasurement& test, const FrfOptions& options, const ProgressCallback& progress) {
   if (test.impacts.empty()) throw InputError("", "the hammer test holds no impact");
-  const acquisition::ProcessedTest processed = acquisition::AnalyseImpacts(test, options.impact);
+  // Progress: the impacts' analysis is the first half, the spectra (to 0.95) and the FRFs from them
+  // the second ("FRF"), 1 when done. Every step, from whichever worker thread, is also where a
+  // callback that throws (a cancellation) stops the estimation.
+  ProgressCallback analysis_progress;
+  if (progress)
+    analysis_progress = [&progress](double f, std::string_view stage) { progress(0.5 * f, stage); };
+  const acquisition::ProcessedTest processed = acquisition::AnalyseImpacts(test, options.impact, analysis_progress);
   const int n = test.samples;
   const int n_refs = static_cast<int>(test.references.size());
   const int n_out = static_cast<int>(test.outputs.size());
@@ -56,6 +63,7 @@ FrfResult EstimateFrfs(const HammerMeasurement& test, const FrfOptions& options,
   std::vector<int> force_slot(test.impacts.size(), -1);  // index into force spectra, -1 = not needed
   int n_forces = 0;
   for (size_t k = 0; k < test.impacts.size(); ++k) {
+    if (k % 256 == 255) ReportProgress(progress, 0.5, "FRF");  // tens of thousands of impacts take a while
     const Impact& imp = test.impacts[k];
     const ImpactAnalysis& a = processed.impacts[k];
     const int r = ref_index(imp.reference);
@@ -83,6 +91,10 @@ FrfResult EstimateFrfs(const HammerMeasurement& test, const FrfOptions& options,
       work[b].push_back({static_cast<int>(k), static_cast<int>(slot)});
     }
   }
+  std::size_t spectra_total = static_cast<std::size_t>(n_forces);
+  for (const std::vector<Work>& w : work) spectra_total += w.size();
+  StepProgress spectra_progress(progress, "FRF", spectra_total, 0.5, 0.95);
+  auto spectrum_done = [&] { spectra_progress.Step(); };
   // Force spectra once per used impact.
   std::vector<std::complex<double>> forces(static_cast<size_t>(n_forces) * lines);
   for (size_t k = 0; k < test.impacts.size(); ++k) {
@@ -91,31 +103,32 @@ FrfResult EstimateFrfs(const HammerMeasurement& test, const FrfOptions& options,
                              force_fft.input());
     const std::complex<double>* fx = force_fft.Execute();
     std::copy(fx, fx + lines, forces.begin() + static_cast<std::ptrdiff_t>(force_slot[k]) * lines);
+    spectrum_done();
   }
   // Pass 2: response transforms and accumulation. Each bucket belongs to one thread and is summed
   // in impact order, so the result does not depend on the thread count.
   const int hw = static_cast<int>(std::thread::hardware_concurrency());
   const int threads = std::max(1, std::min<int>(options.threads > 0 ? options.threads : std::max(1, hw),
                                                 static_cast<int>(keys.size())));
-  auto worker = [&](int t, RealFft* fft) {
+  auto worker = [&](int t, RealFft* fft, const std::atomic<bool>& stop) {
     for (size_t b = t; b < keys.size(); b += threads) {
       for (const Work& w : work[b]) {
+        if (stop.load(std::memory_order_relaxed)) return;
         const Impact& imp = test.impacts[w.impact];
         acquisition::WindowResponse(test.records[imp.responses[w.slot]], processed.impacts[w.impact], w.slot,
                                     processed.decay_rate, fft->input());
         spectra[b].Add(forces.data() + static_cast<std::ptrdiff_t>(force_slot[w.impact]) * lines, fft->Execute());
+        spectrum_done();
       }
     }
   };
   {
     std::vector<std::unique_ptr<RealFft>> ffts;
     for (int t = 1; t < threads; ++t) ffts.push_back(std::make_unique<RealFft>(n));
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t) pool.emplace_back(worker, t, ffts[t - 1].get());
-    worker(0, &response_fft);
-    for (std::thread& th : pool) th.join();
+    RunOnThreads(threads, [&](int t, const std::atomic<bool>& stop) {
+      worker(t, t == 0 ? &response_fft : ffts[static_cast<size_t>(t - 1)].get(), stop);
+    });
   }
-  ReportProgress(progress, 1.0, "FRF");
 
   // Every FRF needs at least one accepted impact.
   for (size_t b = 0; b < keys.size(); ++b)
@@ -162,6 +175,7 @@ FrfResult EstimateFrfs(const HammerMeasurement& test, const FrfOptions& options,
   set.coherence.assign(n_refs, Eigen::MatrixXd::Constant(lines, n_out, kNaN));
   set.averages = Eigen::MatrixXi::Zero(n_refs, n_out);
   for (size_t b = 0; b < keys.size(); ++b) {
+    ReportProgress(progress, 0.95 + 0.04 * static_cast<double>(b) / static_cast<double>(keys.size()), "FRF");
     const auto [r, o] = keys[b];
     Eigen::ArrayXcd h = EstimateFrf(spectra[b], options.estimator);
     // Sets measured with another response quantity join the first one's (spec §1.9).
@@ -182,6 +196,7 @@ FrfResult EstimateFrfs(const HammerMeasurement& test, const FrfOptions& options,
       throw InputError(test.set_names.front(), buf);
     }
   }
+  ReportProgress(progress, 1.0, "FRF");
   return result;
 }
 

@@ -15,7 +15,7 @@ namespace ema::model {
 namespace {
 
 std::string Where(const Model& model, const Effect& e) {
-  return model.Where(e.line) + ": effect " + e.kind + " '" + e.target + "'";
+  return model.Where(e.line) + ": effect " + KindName(e.kind) + " '" + e.target + "'";
 }
 
 double Param(const Model& model, const Effect& e, const std::string& key, bool positive) {
@@ -70,7 +70,7 @@ Body& TargetBody(Model& model, const Effect& e) {
   if (!b) {
     std::string known;
     for (const Body& x : model.bodies) known += (known.empty() ? "" : ", ") + x.name;
-    if (!model.fe.parts.empty() && e.kind == "mass_scale")
+    if (!model.fe.parts.empty() && e.kind == EffectKind::kMassScale)
       throw InputError(Where(model, e), "no body, part group or part '" + e.target + "' (targets: " +
                                             KnownTargets(model, true) + ")");
     throw InputError(Where(model, e), "no body '" + e.target + "' (bodies: " + (known.empty() ? "none" : known) + ")");
@@ -247,6 +247,8 @@ const EffectKindInfo& Info(EffectKind kind) {
   throw std::logic_error("effect kind missing from EffectKindTable");
 }
 
+std::string KindName(EffectKind kind) { return Info(kind).name; }
+
 const std::vector<std::string>& EffectKinds() {
   static const std::vector<std::string> kKinds = [] {
     std::vector<std::string> names;
@@ -257,14 +259,8 @@ const std::vector<std::string>& EffectKinds() {
 }
 
 Model ApplyEffect(const Model& input, const Effect& e) {
-  const EffectKindInfo* info = FindEffectKind(e.kind);
-  if (!info) {
-    std::string kinds;
-    for (const auto& k : EffectKinds()) kinds += (kinds.empty() ? "" : ", ") + k;
-    throw InputError(Where(input, e), "unknown effect kind (allowed: " + kinds + ")");
-  }
   Model model = input;
-  info->apply(model, e);
+  Info(e.kind).apply(model, e);
   return model;
 }
 
@@ -310,21 +306,25 @@ std::vector<Effect> CandidateEffects(const Model& input) {
   }
   for (const std::string& g : groups) {
     const double k_mean = k_sum[g].second > 0 ? k_sum[g].first / k_sum[g].second : 0.0;
-    Effect sc{"series_compliance", g, {}, Law(LinearLaw{k_mean > 0.0 ? k_mean : 1.0e6}), 0};
+    Effect sc{EffectKind::kSeriesCompliance, g, {}, Law(LinearLaw{k_mean > 0.0 ? k_mean : 1.0e6}), 0};
     out.push_back(sc);
-    out.push_back(Effect{"stiffness_scale", g, {{"factor", 1.0}}, std::nullopt, 0});
-    if (op_value.count(g)) out.push_back(Effect{"operating_point", g, {{"value", op_value[g]}}, std::nullopt, 0});
+    out.push_back(Effect{EffectKind::kStiffnessScale, g, {{"factor", 1.0}}, std::nullopt, 0});
+    if (op_value.count(g))
+      out.push_back(Effect{EffectKind::kOperatingPoint, g, {{"value", op_value[g]}}, std::nullopt, 0});
   }
-  if (!model.points.empty()) out.push_back(Effect{"added_mass", "all_points", {{"mass", 0.0}}, std::nullopt, 0});
+  if (!model.points.empty())
+    out.push_back(Effect{EffectKind::kAddedMass, "all_points", {{"mass", 0.0}}, std::nullopt, 0});
   const double k_ground = all_n > 0 ? 1e-3 * all_k / all_n : 1.0e3;
-  for (const Body& b : model.bodies) out.push_back(Effect{"mass_scale", b.name, {{"factor", 1.0}}, std::nullopt, 0});
-  for (const Body& b : model.bodies) out.push_back(Effect{"ground_spring", b.name, {{"k", k_ground}}, std::nullopt, 0});
+  for (const Body& b : model.bodies)
+    out.push_back(Effect{EffectKind::kMassScale, b.name, {{"factor", 1.0}}, std::nullopt, 0});
+  for (const Body& b : model.bodies)
+    out.push_back(Effect{EffectKind::kGroundSpring, b.name, {{"k", k_ground}}, std::nullopt, 0});
   return out;
 }
 
 std::string Describe(const Effect& e) {
   std::ostringstream s;
-  s << e.kind << " " << e.target;
+  s << KindName(e.kind) << " " << e.target;
   for (const auto& [k, v] : e.parameters) s << " " << k << "=" << v;
   if (e.law) {
     s << " law=" << e.law->KindName();

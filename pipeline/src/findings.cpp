@@ -20,8 +20,7 @@ std::vector<SpringStiffness> SpringStiffnessOf(const model::Model& model, const 
   model::Model updated = model;
   for (const model::Effect& e : effects) updated = model::ApplyEffect(updated, e);
   const std::vector<int> springs = model::TargetSprings(updated, effect.target);
-  const bool series = model::FindEffectKind(effect.kind) &&
-                      model::FindEffectKind(effect.kind)->kind == model::EffectKind::kSeriesCompliance;
+  const bool series = effect.kind == model::EffectKind::kSeriesCompliance;
   for (const std::string& setup : setups) {
     model::SolveOptions options;
     options.setup = setup;
@@ -45,6 +44,13 @@ std::vector<SpringStiffness> SpringStiffnessOf(const model::Model& model, const 
 }
 
 double Square(double v) { return std::isfinite(v) ? v * v : 0.0; }
+
+// True when the group's readings add no effect: the model as given.
+bool IsNoneGroup(const diagnose::Diagnosis& d, const diagnose::CandidateGroup& group) {
+  for (const diagnose::Candidate& c : d.candidates)
+    if (!group.ranks.empty() && c.rank == group.ranks.front()) return c.IsNone();
+  return false;
+}
 
 ModeVerdict VerdictOf(const ModeEvidence& m) {
   if (!m.paired_after) return ModeVerdict::kUnpaired;
@@ -70,8 +76,7 @@ GroupSpan SpanOf(const diagnose::Diagnosis& d, const diagnose::CandidateGroup& g
     for (std::size_t i = 0; i < c->effects.size(); ++i) {
       const model::Effect& e = c->effects[i];
       if (i < best->effects.size() && best->effects[i].target == e.target) continue;
-      const model::EffectKindInfo* info = model::FindEffectKind(e.kind);
-      if (info && info->target == model::EffectTarget::kPoints) points = true;
+      if (model::Info(e.kind).target == model::EffectTarget::kPoints) points = true;
       else others = true;
     }
   if (points && !others) return GroupSpan::kPoints;
@@ -124,7 +129,7 @@ Findings FindingsOf(const diagnose::Diagnosis& d, const model::Model& model) {
     const bool holds_first = std::find(g.ranks.begin(), g.ranks.end(), first.rank) != g.ranks.end();
     const double p = holds_first ? g.probability - first.probability : g.probability;
     const int others = static_cast<int>(g.ranks.size()) - (holds_first ? 1 : 0);
-    if (others <= 0 || g.kind == "none" || !(p >= first.probability / kLookAlikeFactor) || !(p >= 0.001)) continue;
+    if (others <= 0 || IsNoneGroup(d, g) || !diagnose::IsLookAlike(p, first.probability)) continue;
     out.lookalikes.push_back({g.kind, g.target, others, holds_first, SpanOf(d, g), p});
     if (out.lookalikes.size() == 4) break;
   }

@@ -5,6 +5,7 @@
 #include "ema/formats/amplitude_json.hpp"
 #include "ema/formats/json_codecs.hpp"
 #include "ema/formats/mode_indicators_json.hpp"
+#include "ema/model/effects.hpp"
 
 namespace ema::pipeline {
 
@@ -33,7 +34,7 @@ json FindingsJson(const Findings& findings) {
   for (const EffectFinding& f : findings.effects) {
     diagnose::Candidate single;
     single.effects = {f.effect};
-    single.kind = f.effect.kind;
+    single.kind = model::KindName(f.effect.kind);
     single.target = f.effect.target;
     json parameters = json::array();
     for (const diagnose::FittedParameter& p : f.parameters)
@@ -43,7 +44,7 @@ json FindingsJson(const Findings& findings) {
       springs.push_back({{"setup", s.setup},
                          {"per_spring_n_per_m", NumberOrNull(s.per_spring_n_per_m)},
                          {"element_n_per_m", NumberOrNull(s.element_n_per_m)}});
-    json j = {{"kind", f.effect.kind},
+    json j = {{"kind", model::KindName(f.effect.kind)},
               {"target", f.effect.target},
               {"description", diagnose::DescribeCandidate(single, false)},
               {"probability", f.probability},

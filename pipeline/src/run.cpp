@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <utility>
 
 #include "ema/core/error.hpp"
@@ -90,6 +91,59 @@ diagnose::SetupModes DiagnosisTest(const formats::ProjectTest& test, const TestR
   }
   return out;
 }
+
+// The readings a diagnosis cannot separate from its rank 1 (diagnose::IsLookAlike), rank 1 first,
+// at most `limit`.
+std::vector<planning::Reading> LookAlikeReadings(const diagnose::Diagnosis& d, std::size_t limit) {
+  std::vector<planning::Reading> out;
+  const diagnose::Candidate& first = d.candidates.front();
+  for (const diagnose::Candidate& c : d.candidates) {
+    if (c.effects.empty() || !c.error.empty()) continue;
+    if (c.rank != first.rank && !diagnose::IsLookAlike(c.probability, first.probability)) continue;
+    out.push_back({c.kind + " on " + c.target, c.effects, "the diagnosis, candidate rank " + std::to_string(c.rank)});
+    if (out.size() == limit) break;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::optional<NextTest> PlanNextTest(const model::Model& model, const formats::Project& project,
+                                     const std::vector<TestResult>& tests, const diagnose::Diagnosis& diagnosis) {
+  const std::vector<planning::Reading> readings = LookAlikeReadings(diagnosis, 10);
+  if (readings.size() < 2) return std::nullopt;
+  NextTest next;
+  std::size_t t = 0;
+  while (t < tests.size() && !(tests[t].fit && tests[t].frfs)) ++t;
+  if (t == tests.size()) throw InputError("", "no test with modes to extend");
+  next.test = static_cast<int>(t);
+  const FrfSet& frfs = *tests[t].frfs;
+  std::vector<std::vector<Dof>> sets = frfs.RovingSets();
+  if (sets.empty()) sets.push_back(frfs.outputs);  // sets unknown: the test as one
+  // Triaxial sensors when every measured point has its three directions.
+  std::map<int, int> directions;
+  for (const Dof& d : frfs.outputs) ++directions[d.node];
+  const bool triaxial = std::all_of(directions.begin(), directions.end(), [](const auto& n) { return n.second == 3; });
+  std::size_t largest = 0;
+  for (const auto& set : sets) largest = std::max(largest, set.size());
+  planning::PlanOptions options;
+  options.setup = project.tests[t].setup;
+  options.triaxial = triaxial;
+  options.sensors_per_set = static_cast<int>(triaxial ? largest / 3 : largest);
+  options.sets = 1;  // the new set; the kept ones come on top
+  options.references = static_cast<int>(frfs.references.size());
+  options.sensor_mass_kg = project.tests[t].sensor_mass;
+  if (project.fit.data.band_hi_hz > project.fit.data.band_lo_hz) {
+    options.band_lo_hz = project.fit.data.band_lo_hz;
+    options.band_hi_hz = project.fit.data.band_hi_hz;
+  }
+  for (const planning::Reading& r : readings) next.readings.push_back(r.label);
+  next.kept_sets = static_cast<int>(sets.size());
+  next.plan = planning::PlanTest(model, options, readings, sets, frfs.references);
+  return next;
+}
+
+namespace {
 
 void Mean(const std::vector<TestResult>& tests, bool after, double* agreement, double* mac) {
   double a = 0.0, m = 0.0;
@@ -224,6 +278,17 @@ RunResult Run(const RunPlan& plan, const ProgressCallback& progress) {
     });
   } else {
     runner.Skip(StepKind::kDiagnose, -1, "no test modes");
+  }
+
+  // When rank 1 has look-alikes: the test that tells them apart (not a step: a run without it is
+  // complete, and why it could not be planned is said).
+  if (result.diagnosis && result.nominal) {
+    runner.Report("plan the next test");
+    try {
+      result.next_test = PlanNextTest(*result.nominal, project, result.tests, result.diagnosis->diagnosis);
+    } catch (const std::exception& e) {
+      result.next_test_error = e.what();
+    }
   }
 
   // model → correlate (after), per test.

@@ -91,14 +91,15 @@ TEST(RunHistory, DiagnosedMemberIsPlacedAtItsSpringEnds) {
   const fs::path model = kDir / "places.toml";
   std::ofstream(model) << kModel;
   const model::Model m = formats::ReadModelFile(model);
-  auto effect = [](const char* kind, const char* target) {
+  auto effect = [](model::EffectKind kind, const char* target) {
     model::Effect e;
     e.kind = kind;
     e.target = target;
     return e;
   };
   const json places = report::DiagnosedPlaces(
-      m, {effect("stiffness_scale", "joints/J1"), effect("added_mass", "points:101"), effect("mass_scale", "top")});
+      m, {effect(model::EffectKind::kStiffnessScale, "joints/J1"), effect(model::EffectKind::kAddedMass, "points:101"),
+          effect(model::EffectKind::kMassScale, "top")});
   ASSERT_EQ(places.size(), 3u);
   EXPECT_EQ(places[0]["label"], "J1");
   // J1X and J1Z: end a at (0.1, 0, 0) each; end b is ground (not drawn).

@@ -22,6 +22,7 @@ namespace {
 
 using model::Anchor;
 using model::Effect;
+using model::EffectKind;
 using model::Law;
 using model::LinearLaw;
 using model::Model;
@@ -119,6 +120,11 @@ ModeSet NoisyTest(const Model& truth, const std::string& setup, unsigned seed, d
   return modes;
 }
 
+// True when `c` is the one effect `kind` on `target`.
+bool IsSingle(const Candidate& c, EffectKind kind, const std::string& target) {
+  return c.effects.size() == 1 && c.effects[0].kind == kind && c.effects[0].target == target;
+}
+
 double FittedValue(const Candidate& c, const std::string& name) {
   for (const FittedParameter& p : c.parameters)
     if (p.name == name) return p.value;
@@ -150,7 +156,7 @@ TEST_P(EachKind, RanksFirstWithItsParameter) {
   const Diagnosis d = Diagnose(nominal, tests, options);
   ASSERT_FALSE(d.candidates.empty());
   const Candidate& first = d.candidates.front();
-  EXPECT_EQ(first.kind, kc.truth.kind) << d.explanation;
+  EXPECT_EQ(first.kind, model::KindName(kc.truth.kind)) << d.explanation;
   EXPECT_EQ(first.target, kc.truth.target) << d.explanation;
   EXPECT_NEAR(FittedValue(first, kc.parameter) / kc.value, 1.0, 0.05) << d.explanation;
   // The posterior σ is finite and small: 0.1 % frequency noise on 12 modes pins one parameter
@@ -164,9 +170,9 @@ TEST_P(EachKind, RanksFirstWithItsParameter) {
   EXPECT_LT(first.mean_abs_frequency_error_pct, 0.5);
 }
 
-Effect Make(const std::string& kind, const std::string& target, const std::string& key, double value) {
+Effect Make(EffectKind kind, const std::string& target, const std::string& key, double value) {
   Effect e{kind, target, {{key, value}}, std::nullopt, 0};
-  if (kind == "series_compliance") {
+  if (kind == EffectKind::kSeriesCompliance) {
     e.parameters.clear();
     e.law = Law(LinearLaw{value});
   }
@@ -175,13 +181,13 @@ Effect Make(const std::string& kind, const std::string& target, const std::strin
 
 INSTANTIATE_TEST_SUITE_P(
     Diagnose, EachKind,
-    ::testing::Values(KindCase{Make("series_compliance", "bearings", "k", 6.5e6), "k", 6.5e6, true},
-                      KindCase{Make("stiffness_scale", "mounts", "factor", 0.6), "factor", 0.6, false},
-                      KindCase{Make("operating_point", "bearings", "value", 7.5e-6), "value", 7.5e-6, false},
-                      KindCase{Make("added_mass", "all_points", "mass", 0.03), "mass", 0.03, false},
-                      KindCase{Make("mass_scale", "carriage", "factor", 1.3), "factor", 1.3, false},
-                      KindCase{Make("ground_spring", "carriage", "k", 2e6), "k", 2e6, false}),
-    [](const auto& info) { return info.param.truth.kind; });
+    ::testing::Values(KindCase{Make(EffectKind::kSeriesCompliance, "bearings", "k", 6.5e6), "k", 6.5e6, true},
+                      KindCase{Make(EffectKind::kStiffnessScale, "mounts", "factor", 0.6), "factor", 0.6, false},
+                      KindCase{Make(EffectKind::kOperatingPoint, "bearings", "value", 7.5e-6), "value", 7.5e-6, false},
+                      KindCase{Make(EffectKind::kAddedMass, "all_points", "mass", 0.03), "mass", 0.03, false},
+                      KindCase{Make(EffectKind::kMassScale, "carriage", "factor", 1.3), "factor", 1.3, false},
+                      KindCase{Make(EffectKind::kGroundSpring, "carriage", "k", 2e6), "k", 2e6, false}),
+    [](const auto& info) { return model::KindName(info.param.truth.kind); });
 
 TEST(Diagnose, PosteriorSigmaMatchesTheMonteCarloSpread) {
   // 40 noise realisations (fixed seeds) of the mounts 40 % softer, 0.1 % frequency noise — the
@@ -190,7 +196,7 @@ TEST(Diagnose, PosteriorSigmaMatchesTheMonteCarloSpread) {
   // the 40 fitted factors within ±35 % (the sample std of 40 values is itself uncertain by
   // ~11 %, and the Laplace σ is a local approximation), and no bias beyond 3 standard errors.
   const Model nominal = Guideway();
-  const Model truth = model::ApplyEffect(nominal, Make("stiffness_scale", "mounts", "factor", 0.6));
+  const Model truth = model::ApplyEffect(nominal, Make(EffectKind::kStiffnessScale, "mounts", "factor", 0.6));
   DiagnoseOptions options;
   options.max_effects = 1;
   options.members = false;
@@ -198,7 +204,7 @@ TEST(Diagnose, PosteriorSigmaMatchesTheMonteCarloSpread) {
   for (unsigned seed = 100; seed < 140; ++seed) {
     const Diagnosis d = Diagnose(nominal, {{"", NoisyTest(truth, "", seed)}}, options);
     for (const Candidate& c : d.candidates)
-      if (c.kind == "stiffness_scale" && c.target == "mounts") {
+      if (IsSingle(c, EffectKind::kStiffnessScale, "mounts")) {
         values.push_back(c.parameters.front().value);
         sigmas.push_back(c.parameters.front().sigma);
         break;
@@ -236,7 +242,7 @@ TEST(Diagnose, TwoSetupsSeparateSeriesComplianceFromStiffnessScale) {
   // uniform stiffness factor on them; with two stud settings the compliance's share differs
   // (the film is stiffer at 5 µm than at 9 µm, and the gap shifts by a different amount).
   const Model nominal = Guideway("lateral");
-  const Effect truth_effect = Make("series_compliance", "bearings", "k", 6.5e6);
+  const Effect truth_effect = Make(EffectKind::kSeriesCompliance, "bearings", "k", 6.5e6);
   const Model truth = model::ApplyEffect(nominal, truth_effect);
   DiagnoseOptions options;
   options.max_effects = 1;
@@ -249,7 +255,7 @@ TEST(Diagnose, TwoSetupsSeparateSeriesComplianceFromStiffnessScale) {
   EXPECT_EQ(a.target, "bearings");
   bool found = false;
   for (const Candidate& c : one.candidates)
-    if (c.kind == "stiffness_scale" && c.target == "bearings") {
+    if (IsSingle(c, EffectKind::kStiffnessScale, "bearings")) {
       found = true;
       EXPECT_LT(std::abs(c.cost - a.cost), 1.0);  // same misfit within noise (cost is a χ²)
     }
@@ -267,7 +273,7 @@ TEST(Diagnose, TwoSetupsSeparateSeriesComplianceFromStiffnessScale) {
   // The stiffness scale now pays for not fitting both settings: well behind (> 10 in BIC,
   // "very strong" evidence).
   for (const Candidate& c : two.candidates)
-    if (c.kind == "stiffness_scale" && c.target == "bearings") {
+    if (IsSingle(c, EffectKind::kStiffnessScale, "bearings")) {
       EXPECT_GT(c.score - best.score, 10.0);
     }
   EXPECT_TRUE(best.tied_with.empty()) << two.explanation;
@@ -277,8 +283,8 @@ TEST(Diagnose, PairReportedOnlyWhenItBeatsTheBestSingle) {
   // Truth with two effects: a pair must win; with one effect, no pair may be reported above it.
   Model nominal = Guideway();
   nominal.bodies[0].uncertainty = 0.5;  // an unweighed carriage: a 30 % mass error is plausible
-  Model truth = model::ApplyEffect(nominal, Make("mass_scale", "carriage", "factor", 1.3));
-  truth = model::ApplyEffect(truth, Make("stiffness_scale", "mounts", "factor", 0.6));
+  Model truth = model::ApplyEffect(nominal, Make(EffectKind::kMassScale, "carriage", "factor", 1.3));
+  truth = model::ApplyEffect(truth, Make(EffectKind::kStiffnessScale, "mounts", "factor", 0.6));
   const Diagnosis d = Diagnose(nominal, {{"", NoisyTest(truth, "", 41)}}, DiagnoseOptions{});
   const Candidate& first = d.candidates.front();
   ASSERT_EQ(first.effects.size(), 2u) << d.explanation;
@@ -291,9 +297,9 @@ TEST(Diagnose, PairReportedOnlyWhenItBeatsTheBestSingle) {
   }
   ASSERT_EQ(first.parameters.size(), 2u);
   // 0.1 % frequency noise: both factors land within 1 %; 5 % is the issue's tolerance.
-  EXPECT_EQ(first.parameters[0].effect_kind, "stiffness_scale");
+  EXPECT_EQ(first.parameters[0].effect_kind, EffectKind::kStiffnessScale);
   EXPECT_NEAR(first.parameters[0].value, 0.6, 0.05 * 0.6);
-  EXPECT_EQ(first.parameters[1].effect_kind, "mass_scale");
+  EXPECT_EQ(first.parameters[1].effect_kind, EffectKind::kMassScale);
   EXPECT_NEAR(first.parameters[1].value, 1.3, 0.05 * 1.3);
   EXPECT_GT(first.probability, 0.5);
 }
@@ -303,7 +309,7 @@ TEST(Diagnose, PoorlyMeasuredModeWeighsLess) {
   // 3 % of f), that mode's residual is divided by its σ and barely pulls the fit; without the
   // spread it counts like every other mode and biases the factor.
   const Model nominal = Guideway();
-  const Model truth = model::ApplyEffect(nominal, Make("stiffness_scale", "mounts", "factor", 0.6));
+  const Model truth = model::ApplyEffect(nominal, Make(EffectKind::kStiffnessScale, "mounts", "factor", 0.6));
   ModeSet test = NoisyTest(truth, "", 61, 2e-4, 1e-2);
   test.modes[0].frequency_hz *= 1.03;
   DiagnoseOptions options;
@@ -319,7 +325,7 @@ TEST(Diagnose, PoorlyMeasuredModeWeighsLess) {
   EXPECT_NEAR(with_sigma / 0.6, 1.0, 0.01);
   double without_sigma = kNaN;
   for (const Candidate& c : unweighted.candidates)
-    if (c.kind == "stiffness_scale" && c.target == "mounts") without_sigma = FittedValue(c, "factor");
+    if (IsSingle(c, EffectKind::kStiffnessScale, "mounts")) without_sigma = FittedValue(c, "factor");
   ASSERT_TRUE(std::isfinite(without_sigma));
   EXPECT_LT(std::abs(with_sigma - 0.6), std::abs(without_sigma - 0.6));
 }
@@ -374,7 +380,7 @@ TEST(Diagnose, PriorPullsTheFitTowardsTheModel) {
   // prior is part of the objective, not only of the evidence.
   Model nominal = Guideway();
   model::Effect truth_effect;
-  truth_effect.kind = "mass_scale";
+  truth_effect.kind = EffectKind::kMassScale;
   truth_effect.target = "base";
   truth_effect.parameters["factor"] = 1.04;
   const Model truth = model::ApplyEffect(nominal, truth_effect);
@@ -389,7 +395,7 @@ TEST(Diagnose, PriorPullsTheFitTowardsTheModel) {
       if (b.name == "base") b.uncertainty = uncertainty;
     *out = Diagnose(m, tests, options);
     for (const Candidate& c : out->candidates)
-      if (c.kind == "mass_scale" && c.target == "base") {
+      if (IsSingle(c, EffectKind::kMassScale, "base")) {
         if (uncertainty > 0.1) sigma_data = c.parameters.front().sigma;
         return FittedValue(c, "factor");
       }
@@ -417,7 +423,7 @@ std::pair<Model, std::vector<SetupModes>> MountMBStifferThanItsRating() {
     s.member = x < 0 ? (y > 0 ? "MB" : "MA") : (y > 0 ? "MD" : "MC");
     if (s.member == "MB") s.uncertainty = 0.001;
   }
-  const Model truth = model::ApplyEffect(nominal, Make("stiffness_scale", "mounts/MB", "factor", 1.3));
+  const Model truth = model::ApplyEffect(nominal, Make(EffectKind::kStiffnessScale, "mounts/MB", "factor", 1.3));
   return {nominal, {{"stud-5um", NoisyTest(truth, "stud-5um", 31)}, {"stud-9um", NoisyTest(truth, "stud-9um", 32)}}};
 }
 
@@ -439,7 +445,8 @@ TEST(Diagnose, MemberFitsGoToThePlausibleMembers) {
   const Diagnosis d = Diagnose(nominal, tests, options);
   int fitted_mounts = 0;
   for (const Candidate& c : d.candidates) {
-    if (c.kind != "stiffness_scale" || c.target.rfind("mounts/", 0) != 0) continue;
+    if (c.effects.size() != 1 || c.effects[0].kind != EffectKind::kStiffnessScale || c.target.rfind("mounts/", 0) != 0)
+      continue;
     ++fitted_mounts;
     EXPECT_NE(c.target, "mounts/MB") << d.explanation;
   }
@@ -500,35 +507,51 @@ TEST(EffectProbabilities, SumOverTheCandidatesThatHoldEachEffect) {
   //   added_mass on points:* (single points): 0.4 + 0.3 = 0.7 (points:1,2 is not a single point)
   //   stiffness_scale on joints/*: 0.2 + 0.1 = 0.3, with joints/J1 0.2 and joints/J2 0.1 —
   //   counted once per candidate even where one candidate holds two members (J1 and J2 in #3).
-  auto effect = [](const std::string& kind, const std::string& target) {
+  auto effect = [](EffectKind kind, const std::string& target) {
     Effect e;
     e.kind = kind;
     e.target = target;
     return e;
   };
   std::vector<Candidate> ranked(4);
-  ranked[0].effects = {effect("series_compliance", "bearings"), effect("added_mass", "points:101")};
-  ranked[1].effects = {effect("series_compliance", "bearings"), effect("added_mass", "points:102")};
-  ranked[2].effects = {effect("series_compliance", "bearings"), effect("stiffness_scale", "joints/J1"),
-                       effect("stiffness_scale", "joints/J2")};
-  ranked[3].effects = {effect("stiffness_scale", "joints/J2"), effect("added_mass", "points:1,2")};
+  ranked[0].effects = {effect(EffectKind::kSeriesCompliance, "bearings"), effect(EffectKind::kAddedMass, "points:101")};
+  ranked[1].effects = {effect(EffectKind::kSeriesCompliance, "bearings"), effect(EffectKind::kAddedMass, "points:102")};
+  ranked[2].effects = {effect(EffectKind::kSeriesCompliance, "bearings"),
+                       effect(EffectKind::kStiffnessScale, "joints/J1"),
+                       effect(EffectKind::kStiffnessScale, "joints/J2")};
+  ranked[3].effects = {effect(EffectKind::kStiffnessScale, "joints/J2"), effect(EffectKind::kAddedMass, "points:1,2")};
   const double p[] = {0.4, 0.3, 0.2, 0.1};
   for (int i = 0; i < 4; ++i) ranked[i].probability = p[i];
   const std::vector<EffectProbability> out = EffectProbabilities(ranked);
-  auto find = [&](const std::string& kind, const std::string& target) {
+  auto find = [&](EffectKind kind, const std::string& target) {
     for (const auto& e : out)
       if (e.kind == kind && e.target == target) return e.probability;
     return -1.0;
   };
-  EXPECT_NEAR(find("series_compliance", "bearings"), 0.9, 1e-12);
-  EXPECT_NEAR(find("added_mass", "points:*"), 0.7, 1e-12);
-  EXPECT_NEAR(find("added_mass", "points:101"), 0.4, 1e-12);
-  EXPECT_NEAR(find("added_mass", "points:1,2"), 0.1, 1e-12);
-  EXPECT_NEAR(find("stiffness_scale", "joints/*"), 0.3, 1e-12);
-  EXPECT_NEAR(find("stiffness_scale", "joints/J1"), 0.2, 1e-12);
-  EXPECT_NEAR(find("stiffness_scale", "joints/J2"), 0.3, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kSeriesCompliance, "bearings"), 0.9, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kAddedMass, "points:*"), 0.7, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kAddedMass, "points:101"), 0.4, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kAddedMass, "points:1,2"), 0.1, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kStiffnessScale, "joints/*"), 0.3, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kStiffnessScale, "joints/J1"), 0.2, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kStiffnessScale, "joints/J2"), 0.3, 1e-12);
   ASSERT_FALSE(out.empty());
   for (size_t i = 1; i < out.size(); ++i) EXPECT_GE(out[i - 1].probability, out[i].probability) << "most probable first";
+}
+
+TEST(EffectProbabilities, EqualProbabilitiesKeepTheOrderOfTheKindsNames) {
+  // One candidate holds every effect, so all sum alike: DIAG.json lists them by kind name, then
+  // target (as when kinds were text), not in the vocabulary's order.
+  Candidate c;
+  c.probability = 1.0;
+  c.effects = {Effect{EffectKind::kSeriesCompliance, "bearings", {}, std::nullopt, 0},
+               Effect{EffectKind::kAddedMass, "points:101", {{"mass", 0.01}}, std::nullopt, 0},
+               Effect{EffectKind::kGroundSpring, "base", {{"k", 1e5}}, std::nullopt, 0}};
+  const std::vector<EffectProbability> out = EffectProbabilities({c});
+  std::vector<std::string> order;
+  for (const EffectProbability& e : out) order.push_back(model::KindName(e.kind) + " " + e.target);
+  EXPECT_EQ(order, (std::vector<std::string>{"added_mass points:*", "added_mass points:101", "ground_spring base",
+                                             "series_compliance bearings"}));
 }
 
 }  // namespace

@@ -20,6 +20,7 @@ namespace ema::diagnose {
 namespace {
 
 namespace fs = std::filesystem;
+using model::EffectKind;
 
 const fs::path kDir = fs::path(EMA_TEST_TMP_DIR) / "diagnose" / "frame";
 
@@ -70,7 +71,7 @@ TEST(PartsDiagnosis, OneMemberPartSoftenedRanksFirstWithItsFactor) {
   const model::Model nominal = formats::ReadModelFile(Frame().model);
   ASSERT_GE(Frame().dofs, 900);
   ASSERT_GE(Frame().parts, 15);
-  const ModeSet test = Measure(WithEffects({{"stiffness_scale", "girders/G3", {{"factor", 0.3}}, {}, 0}}), 6, 1e-3, 1);
+  const ModeSet test = Measure(WithEffects({{EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.3}}, {}, 0}}), 6, 1e-3, 1);
   const Diagnosis d = Diagnose(nominal, {{"", test}});
   const Candidate& first = d.candidates.front();
   ASSERT_EQ(first.effects.size(), 1u) << d.explanation;
@@ -88,7 +89,7 @@ TEST(PartsDiagnosis, OneMemberPartSoftenedRanksFirstWithItsFactor) {
 
 TEST(PartsDiagnosis, OneGroupSoftenedRanksFirst) {
   const model::Model nominal = formats::ReadModelFile(Frame().model);
-  const ModeSet test = Measure(WithEffects({{"stiffness_scale", "girders", {{"factor", 0.6}}, {}, 0}}), 6, 1e-3, 2);
+  const ModeSet test = Measure(WithEffects({{EffectKind::kStiffnessScale, "girders", {{"factor", 0.6}}, {}, 0}}), 6, 1e-3, 2);
   const Diagnosis d = Diagnose(nominal, {{"", test}});
   const Candidate& first = d.candidates.front();
   ASSERT_EQ(first.effects.size(), 1u) << d.explanation;
@@ -99,8 +100,8 @@ TEST(PartsDiagnosis, OneGroupSoftenedRanksFirst) {
 
 TEST(PartsDiagnosis, APartPlusAnAddedMass) {
   const model::Model nominal = formats::ReadModelFile(Frame().model);
-  const ModeSet test = Measure(WithEffects({{"stiffness_scale", "bearings", {{"factor", 0.05}}, {}, 0},
-                                            {"added_mass", "points:1040", {{"mass", 150.0}}, {}, 0}}),
+  const ModeSet test = Measure(WithEffects({{EffectKind::kStiffnessScale, "bearings", {{"factor", 0.05}}, {}, 0},
+                                            {EffectKind::kAddedMass, "points:1040", {{"mass", 150.0}}, {}, 0}}),
                                6, 5e-4, 3);
   const Diagnosis d = Diagnose(nominal, {{"", test}});
   const Candidate& first = d.candidates.front();

@@ -32,6 +32,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using model::Anchor;
+using model::EffectKind;
 using model::Model;
 
 Model Table() {
@@ -103,7 +104,7 @@ void ExpectTheTruthAlone(const Diagnosis& d) {
 
 TEST(TestModeQuality, BlendsOfRepeatedRootsAreJudgedAgainstTheirSpan) {
   const Model nominal = Table();
-  const Model truth = model::ApplyEffect(nominal, {"stiffness_scale", "mounts", {{"factor", 0.6}}, std::nullopt, 0});
+  const Model truth = model::ApplyEffect(nominal, {EffectKind::kStiffnessScale, "mounts", {{"factor", 0.6}}, std::nullopt, 0});
   ModeSet test = Noisy(truth, 11);
   const auto pairs = ClosePairs(test);
   ASSERT_GE(pairs.size(), 1u) << "the table must have a repeated root for this test";
@@ -124,7 +125,7 @@ TEST(TestModeQuality, AComplexShapeDoesNotBuySpuriousEffects) {
   // 2 % noise. Weighed as a 1 % shape, that mode bought a second ground spring (on the base).
   const fs::path file = fs::path(EMA_SOURCE_DIR) / "tests/diagnose/data/benchmark-stack3.toml";
   const Model nominal = formats::ReadModelFile(file);
-  const Model truth = model::ApplyEffect(nominal, {"ground_spring", "middle", {{"k", 3826524.5447497265}}, std::nullopt, 0});
+  const Model truth = model::ApplyEffect(nominal, {EffectKind::kGroundSpring, "middle", {{"k", 3826524.5447497265}}, std::nullopt, 0});
   const ModeSet clean = Noisy(truth, 12);
   ASSERT_GE(clean.modes.size(), 8u);
   ASSERT_LT(clean.modes[1].frequency_hz / clean.modes[0].frequency_hz - 1.0, 0.02);
@@ -151,8 +152,8 @@ TEST(SearchSwap, ALookAlikeInTheBestSetIsSwappedForTheTruth) {
   // look-alikes and dropping the rest finds the truth.
   const fs::path file = fs::path(EMA_SOURCE_DIR) / "tests/diagnose/data/benchmark-stack2.toml";
   const Model nominal = formats::ReadModelFile(file);
-  Model truth = model::ApplyEffect(nominal, {"ground_spring", "base", {{"k", 3750979.8508189674}}, std::nullopt, 0});
-  truth = model::ApplyEffect(truth, {"added_mass", "points:104", {{"mass", 0.542521313540122}}, std::nullopt, 0});
+  Model truth = model::ApplyEffect(nominal, {EffectKind::kGroundSpring, "base", {{"k", 3750979.8508189674}}, std::nullopt, 0});
+  truth = model::ApplyEffect(truth, {EffectKind::kAddedMass, "points:104", {{"mass", 0.542521313540122}}, std::nullopt, 0});
   const Diagnosis d = Diagnose(nominal, {{"", Noisy(truth, 1)}});
   ASSERT_FALSE(d.candidates.empty());
   const Candidate& first = d.candidates.front();
@@ -160,8 +161,8 @@ TEST(SearchSwap, ALookAlikeInTheBestSetIsSwappedForTheTruth) {
   EXPECT_EQ(first.target, "points:104+base") << d.explanation;
   for (const FittedParameter& p : first.parameters) {
     // 0.1 % frequency noise: within 10 % (the benchmark's tolerance) with room to spare.
-    const double want = p.effect_kind == "ground_spring" ? 3750979.8508189674 : 0.542521313540122;
-    EXPECT_NEAR(p.value / want, 1.0, 0.10) << p.effect_kind << " " << d.explanation;
+    const double want = p.effect_kind == EffectKind::kGroundSpring ? 3750979.8508189674 : 0.542521313540122;
+    EXPECT_NEAR(p.value / want, 1.0, 0.10) << model::KindName(p.effect_kind) << " " << d.explanation;
   }
 }
 
@@ -187,8 +188,8 @@ TEST(SearchSwap, ADeckFactorStandingInForOneCrossBeamZoneIsSwappedForTheTruth) {
   for (const FittedParameter& p : first.parameters) {
     // 2 % response noise through the whole chain: the fit gives 2.464 and 41.39 kg (σ 1 %); the
     // benchmark's 10 % would let a look-alike's value through, 2 % does not.
-    const double want = p.effect_kind == "stiffness_scale" ? 2.473290338261697 : 41.471351752140485;
-    EXPECT_NEAR(p.value / want, 1.0, 0.02) << p.effect_kind << " " << d.explanation;
+    const double want = p.effect_kind == EffectKind::kStiffnessScale ? 2.473290338261697 : 41.471351752140485;
+    EXPECT_NEAR(p.value / want, 1.0, 0.02) << model::KindName(p.effect_kind) << " " << d.explanation;
   }
   EXPECT_GT(first.probability, 0.9) << d.explanation;
 }

@@ -51,7 +51,7 @@ diagnose::Diagnosis SmallDiagnosis() {
   linear.target = "joints/J3";
   linear.probability = 0.625;
   model::Effect compliance;
-  compliance.kind = "series_compliance";
+  compliance.kind = model::EffectKind::kSeriesCompliance;
   compliance.target = "joints/J3";
   compliance.parameters["k"] = 6.5e6;
   compliance.law = model::LinearLaw{6.5e6};
@@ -68,11 +68,11 @@ diagnose::Diagnosis SmallDiagnosis() {
   two.target = "bearings+mounts";
   two.probability = 0.125;
   model::Effect contact;
-  contact.kind = "series_compliance";
+  contact.kind = model::EffectKind::kSeriesCompliance;
   contact.target = "bearings";
   contact.law = HertzInSeries();
   model::Effect scale;
-  scale.kind = "stiffness_scale";
+  scale.kind = model::EffectKind::kStiffnessScale;
   scale.target = "mounts";
   scale.parameters["factor"] = 1.0 / 3.0;
   two.effects = {contact, scale};
@@ -228,6 +228,13 @@ TEST(DiagnosisReadings, BadFilesNameTheFileAndTheRank) {
                               "effects": [{"kind": "stiffness_scale", "target": "mounts",
                                            "parameters": {"gain": 2.0}}]}]})"),
          "readings-unknown-parameter.json", {"rank 6", "gain"});
+  // An effect's kind is parsed where it enters: one outside the vocabulary is said at its candidate.
+  expect(ReadingsErrorOf("readings-unknown-kind.json",
+                         R"({"candidates": [{"rank": 2, "kind": "glue", "target": "joints",
+                              "effects": [{"kind": "glue", "target": "joints", "parameters": {}}]}]})"),
+         "readings-unknown-kind.json",
+         {"candidate rank 2: effect 1: effect glue 'joints': unknown effect kind (allowed: series_compliance, "
+          "stiffness_scale, operating_point, added_mass, mass_scale, ground_spring)"});
   // The line numbers of the TOML built inside are not shown: they are in no file.
   const std::string law_message = ReadingsErrorOf("readings-bad-law2.json",
                          R"({"candidates": [{"rank": 3, "kind": "series_compliance", "target": "joints",

@@ -78,13 +78,13 @@ curvefit::FitResult LabelledFit() {
 diagnose::Candidate LabelledCandidate() {
   diagnose::Candidate c;
   model::Effect e;
-  e.kind = kLatin1;
+  e.kind = model::EffectKind::kStiffnessScale;  // typed: written by its name from the table
   e.target = kOverlong;
   e.parameters[kLatin1] = kNaN;
   e.law = model::LinearLaw{kInf};
   c.effects = {e};
   diagnose::FittedParameter p;
-  p.effect_kind = kLatin1;
+  p.effect_kind = model::EffectKind::kStiffnessScale;
   p.name = kLatin1;  // a JSON key
   p.value = kInf;
   p.at_bound = true;
@@ -174,7 +174,7 @@ TEST(JsonWriters, EveryCodecWritesValidJsonForNonUtf8LabelsAndNonFiniteNumbers) 
   d.baseline = candidate;
   d.candidates = {candidate, candidate};
   d.steps = {{kLatin1, kNaN, kInf, -kInf}};
-  d.effect_probabilities = {{kLatin1, kOverlong, kNaN}};
+  d.effect_probabilities = {{model::EffectKind::kStiffnessScale, kOverlong, kNaN}};
   d.groups = {{kLatin1, kNul, {1, 2}, kInf}};
   d.explanation = kLatin1;
   const json diagnosis = DumpAndParse(DiagnosisJson(d, {}));

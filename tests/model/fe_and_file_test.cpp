@@ -262,9 +262,9 @@ TEST(ModelFile, WriteWithEffectsKeepsFileAndRoundTrips) {
   const fs::path dir = testing::TempDir("file_effects");
   const fs::path in = WriteCarriage(dir);
   const fs::path out = dir / "updated.toml";
-  Effect series{"series_compliance", "bearings", {}, Law(LinearLaw{6.5e6}), 0};
-  Effect scale{"mass_scale", "carriage", {{"factor", 1.0625}}, std::nullopt, 0};
-  Effect fitted{"series_compliance", "bearings", {{"k", 3.25e7}}, std::nullopt, 0};
+  Effect series{EffectKind::kSeriesCompliance, "bearings", {}, Law(LinearLaw{6.5e6}), 0};
+  Effect scale{EffectKind::kMassScale, "carriage", {{"factor", 1.0625}}, std::nullopt, 0};
+  Effect fitted{EffectKind::kSeriesCompliance, "bearings", {{"k", 3.25e7}}, std::nullopt, 0};
   formats::WriteModelWithEffects(in, out, {series, scale, fitted});
   std::ifstream a(in), b(out);
   const std::string original((std::istreambuf_iterator<char>(a)), {}), updated((std::istreambuf_iterator<char>(b)), {});
@@ -272,7 +272,7 @@ TEST(ModelFile, WriteWithEffectsKeepsFileAndRoundTrips) {
   const Model m = formats::ReadModelFile(out);
   ASSERT_EQ(m.effects.size(), 3u);
   EXPECT_DOUBLE_EQ(std::get<LinearLaw>(m.effects[2].law->value).k, 3.25e7) << "k written as a linear law";
-  EXPECT_EQ(m.effects[0].kind, "series_compliance");
+  EXPECT_EQ(m.effects[0].kind, EffectKind::kSeriesCompliance);
   EXPECT_DOUBLE_EQ(std::get<LinearLaw>(m.effects[0].law->value).k, 6.5e6);
   EXPECT_DOUBLE_EQ(m.effects[1].parameters.at("factor"), 1.0625);
   // Solving the updated file applies its effects: lower frequencies than the original.
@@ -287,7 +287,7 @@ TEST(ModelFile, WrittenElsewhereRewritesRelativePathsAndLoads) {
   const fs::path in = WriteCarriage(dir);
   const fs::path out = dir / "deeper" / "still" / "updated.toml";
   fs::create_directories(out.parent_path());
-  Effect scale{"mass_scale", "carriage", {{"factor", 1.0625}}, std::nullopt, 0};
+  Effect scale{EffectKind::kMassScale, "carriage", {{"factor", 1.0625}}, std::nullopt, 0};
   formats::WriteModelWithEffects(in, out, {scale});
   std::ifstream b(out);
   const std::string updated((std::istreambuf_iterator<char>(b)), {});

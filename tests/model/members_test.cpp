@@ -95,15 +95,15 @@ TEST(Members, ExplicitMemberKeyWinsAndPrefixCollisionsFallBackToTheFirstName) {
 
 TEST(Members, MemberEffectChangesOnlyThatMember) {
   const Model m = Joints();
-  const Model scaled = ApplyEffect(m, Effect{"stiffness_scale", "joints/J2", {{"factor", 0.25}}, std::nullopt, 0});
+  const Model scaled = ApplyEffect(m, Effect{EffectKind::kStiffnessScale, "joints/J2", {{"factor", 0.25}}, std::nullopt, 0});
   for (size_t i = 0; i < m.springs.size(); ++i)
     EXPECT_DOUBLE_EQ(scaled.springs[i].stiffness_factor, (i == 2 || i == 3) ? 0.25 : 1.0) << m.springs[i].name;
-  const Model series = ApplyEffect(m, Effect{"series_compliance", "joints/J1", {{"k", 1e7}}, std::nullopt, 0});
+  const Model series = ApplyEffect(m, Effect{EffectKind::kSeriesCompliance, "joints/J1", {{"k", 1e7}}, std::nullopt, 0});
   // Two 1e7 springs in series: 5e6 for J1's springs, unchanged elsewhere.
   EXPECT_NEAR(LinearizeLaw(series.springs[0].law, "J1X").stiffness, 5e6, 1e-3);
   EXPECT_NEAR(LinearizeLaw(series.springs[2].law, "J2X").stiffness, 1e7, 1e-3);
   try {
-    ApplyEffect(m, Effect{"stiffness_scale", "joints/J9", {{"factor", 0.5}}, std::nullopt, 0});
+    ApplyEffect(m, Effect{EffectKind::kStiffnessScale, "joints/J9", {{"factor", 0.5}}, std::nullopt, 0});
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no member 'J9' in group 'joints' (members: J1, J2, bolt)"), std::string::npos)
@@ -126,6 +126,20 @@ TEST(EffectTable, EveryKindOnceWithItsParameterAndAnApplyFunction) {
   EXPECT_EQ(FindEffectKind("glue"), nullptr);
   EXPECT_STREQ(Info(EffectKind::kMassScale).parameter, "factor");
   EXPECT_DOUBLE_EQ(Info(EffectKind::kMassScale).prior_sigma, 0.05);  // documented default (docs/diagnose.md)
+}
+
+TEST(EffectTable, AnUnknownKindIsSaidWhereTheModelFileIsRead) {
+  // The kind is parsed once, by the reader, with the words applying the effect used to say.
+  const auto dir = testing::TempDir("effect_kind_unknown");
+  const auto path = testing::WriteText(dir / "m.toml", "[[body]]\nname = \"c\"\nmass = 1.0\ninertia = [0.01, 0.01, 0.01]\n"
+                                                       "\n[[effect]]\nkind = \"glue\"\ntarget = \"c\"\nfactor = 2.0\n");
+  try {
+    formats::ReadModelFile(path);
+    FAIL() << "an unknown effect kind was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), path.string() + ":6: effect glue 'c': unknown effect kind (allowed: series_compliance, "
+                                                      "stiffness_scale, operating_point, added_mass, mass_scale, ground_spring)");
+  }
 }
 
 TEST(PriorKnowledge, UncertaintyMemberAndPriorsAreRead) {
@@ -155,9 +169,9 @@ added_mass = 0.01
   EXPECT_DOUBLE_EQ(m.springs[0].uncertainty, 0.5);
   EXPECT_EQ(m.springs[0].member, "pad-1");
   EXPECT_EQ(Members(m).front().Target(), "bearings/pad-1");
-  EXPECT_DOUBLE_EQ(m.priors.at("mass_scale"), 0.1);
-  EXPECT_DOUBLE_EQ(m.priors.at("added_mass"), 0.01);
-  EXPECT_EQ(m.priors.count("stiffness_scale"), 0u);
+  EXPECT_DOUBLE_EQ(m.priors.at(EffectKind::kMassScale), 0.1);
+  EXPECT_DOUBLE_EQ(m.priors.at(EffectKind::kAddedMass), 0.01);
+  EXPECT_EQ(m.priors.count(EffectKind::kStiffnessScale), 0u);
 }
 
 TEST(PriorKnowledge, BadValuesAreInputErrorsNamingTheKey) {

@@ -93,23 +93,25 @@ TEST_F(FrameParts, StiffnessScaleTargetsAMemberAGroupAndALonePart) {
     ADD_FAILURE() << "no part " << name;
     return Eigen::MatrixXd();
   };
-  const Eigen::MatrixXd member = DenseK(ApplyEffect(m, {"stiffness_scale", "girders/G3", {{"factor", 0.3}}, {}, 0}));
+  const Eigen::MatrixXd member =
+      DenseK(ApplyEffect(m, {EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.3}}, {}, 0}));
   EXPECT_LT((member - (k0 - 0.7 * part_k("G3"))).norm(), 1e-12 * k0.norm());
   Eigen::MatrixXd cross = Eigen::MatrixXd::Zero(k0.rows(), k0.cols());
   for (const char* x : {"X1", "X2", "X3", "X4"}) cross += part_k(x);
-  const Eigen::MatrixXd group = DenseK(ApplyEffect(m, {"stiffness_scale", "cross", {{"factor", 0.6}}, {}, 0}));
+  const Eigen::MatrixXd group = DenseK(ApplyEffect(m, {EffectKind::kStiffnessScale, "cross", {{"factor", 0.6}}, {}, 0}));
   EXPECT_LT((group - (k0 - 0.4 * cross)).norm(), 1e-12 * k0.norm());
-  const Eigen::MatrixXd lone = DenseK(ApplyEffect(m, {"stiffness_scale", "deck", {{"factor", 2.0}}, {}, 0}));
+  const Eigen::MatrixXd lone = DenseK(ApplyEffect(m, {EffectKind::kStiffnessScale, "deck", {{"factor", 2.0}}, {}, 0}));
   EXPECT_LT((lone - (k0 + part_k("deck"))).norm(), 1e-12 * k0.norm());
   // A target that names nothing lists the targets there are.
   try {
-    ApplyEffect(m, {"stiffness_scale", "girders/G9", {{"factor", 0.5}}, {}, 0});
+    ApplyEffect(m, {EffectKind::kStiffnessScale, "girders/G9", {{"factor", 0.5}}, {}, 0});
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no part 'G9' in part group 'girders' (members: G1, G2"), std::string::npos)
         << e.what();
   }
-  EXPECT_THROW(ApplyEffect(m, {"mass_scale", "girders", {{"factor", 0.5}}, {}, 0}), InputError);  // girders carry no mass
+  // Girders carry no mass.
+  EXPECT_THROW(ApplyEffect(m, {EffectKind::kMassScale, "girders", {{"factor", 0.5}}, {}, 0}), InputError);
 }
 
 // The reduced model: the base's modes and each probe's static responses (first and second order)
@@ -124,12 +126,12 @@ TEST_F(FrameParts, ReducedModelMatchesFullSolves) {
   ro.modes = 20;
   ro.enriched_modes = 10;
   const ReducedModelFactory factory(m, so, ro);
-  const Effect probe{"stiffness_scale", "girders/G3", {{"factor", 0.5}}, {}, 0};
+  const Effect probe{EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.5}}, {}, 0};
   const auto reduced = factory.Make({{probe}});
   EXPECT_GT(reduced->BasisSize(), 20);
   EXPECT_LE(reduced->BasisSize(), 40);  // 20 modes + 2 x 10 responses
   for (double factor : {1.0, 0.6, 0.05}) {
-    const Effect e{"stiffness_scale", "girders/G3", {{"factor", factor}}, {}, 0};
+    const Effect e{EffectKind::kStiffnessScale, "girders/G3", {{"factor", factor}}, {}, 0};
     const std::vector<double> full = Frequencies(Solve(ApplyEffect(m, e), so));
     const std::vector<double> approx = Frequencies(reduced->Solve(ApplyEffect(factory.Skeleton(), e), so));
     ASSERT_EQ(full.size(), approx.size());
@@ -152,9 +154,11 @@ TEST_F(FrameParts, ReducedModelMatchesFullSolves) {
 TEST_F(FrameParts, WrittenModelLoadsFromAnotherFolder) {
   const fs::path elsewhere = testing::TempDir("frame-parts-elsewhere") / "sub" / "updated.toml";
   fs::create_directories(elsewhere.parent_path());
-  formats::WriteModelWithEffects(files_->model, elsewhere, {{"stiffness_scale", "girders/G2", {{"factor", 0.5}}, {}, 0}});
+  formats::WriteModelWithEffects(files_->model, elsewhere,
+                                 {{EffectKind::kStiffnessScale, "girders/G2", {{"factor", 0.5}}, {}, 0}});
   const Model written = formats::ReadModelFile(elsewhere);
-  const Model here = ApplyEffect(formats::ReadModelFile(files_->model), {"stiffness_scale", "girders/G2", {{"factor", 0.5}}, {}, 0});
+  const Model here =
+      ApplyEffect(formats::ReadModelFile(files_->model), {EffectKind::kStiffnessScale, "girders/G2", {{"factor", 0.5}}, {}, 0});
   SolveOptions so;
   so.max_modes = 6;
   const std::vector<double> a = Frequencies(Solve(written, so)), b = Frequencies(Solve(here, so));
@@ -168,7 +172,7 @@ TEST_F(FrameParts, WrittenModelCopiedElsewhereLoadsTheSame) {
   const fs::path root = testing::TempDir("frame-parts-copied");
   const fs::path written = root / "out" / "updated.toml";
   fs::create_directories(written.parent_path());
-  const Effect loose{"stiffness_scale", "girders/G2", {{"factor", 0.5}}, {}, 0};
+  const Effect loose{EffectKind::kStiffnessScale, "girders/G2", {{"factor", 0.5}}, {}, 0};
   formats::WriteModelWithEffects(files_->model, written, {loose});
   const fs::path copied = root / "a" / "b" / "c" / "copy.toml";
   fs::create_directories(copied.parent_path());
@@ -187,7 +191,7 @@ TEST_F(FrameParts, BundledModelTravelsWithItsFolder) {
   const fs::path root = testing::TempDir("frame-parts-bundled");
   const fs::path out = root / "send" / "updated.toml";
   fs::create_directories(out.parent_path());
-  const Effect loose{"stiffness_scale", "girders/G2", {{"factor", 0.5}}, {}, 0};
+  const Effect loose{EffectKind::kStiffnessScale, "girders/G2", {{"factor", 0.5}}, {}, 0};
   formats::ModelWriteOptions bundle;
   bundle.bundle = true;
   formats::WriteModelWithEffects(files_->model, out, {loose}, bundle);

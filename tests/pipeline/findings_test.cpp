@@ -33,9 +33,9 @@ diagnose::Candidate Reading(int rank, const std::string& kind, const std::string
   c.kind = kind;
   c.target = target;
   c.probability = probability;
-  if (kind != "none") {
+  if (const model::EffectKindInfo* info = model::FindEffectKind(kind)) {  // "none": the model as given
     model::Effect e;
-    e.kind = kind;
+    e.kind = info->kind;
     e.target = target;
     c.effects = {e};
   }
@@ -52,7 +52,7 @@ TEST(Findings, SpringsOfRankOnesComplianceFollowTheSeriesFormula) {
   d.candidates = {Reading(1, "series_compliance", "mounts", 0.9), Reading(2, "none", "", 0.1)};
   d.candidates[0].effects[0].parameters["k"] = k_e;
   diagnose::FittedParameter p;
-  p.effect_kind = "series_compliance";
+  p.effect_kind = model::EffectKind::kSeriesCompliance;
   p.target = "mounts";
   p.name = "k";
   p.value = k_e;
@@ -61,7 +61,7 @@ TEST(Findings, SpringsOfRankOnesComplianceFollowTheSeriesFormula) {
   d.candidates[0].modes = {Mode(0, 0.5, 0.2)};
   d.baseline = d.candidates[1];
   d.baseline.modes = {Mode(0, 40.0, 1.0)};
-  d.effect_probabilities = {{"series_compliance", "mounts", 0.9}};
+  d.effect_probabilities = {{model::EffectKind::kSeriesCompliance, "mounts", 0.9}};
   const Findings f = FindingsOf(d, nominal);
   ASSERT_EQ(f.effects.size(), 1u);
   EXPECT_DOUBLE_EQ(f.effects[0].probability, 0.9);
@@ -101,7 +101,8 @@ TEST(Findings, LookAlikesWithinAFactor20AndVerdictsAt2And3Sigma) {
               {"stiffness_scale", "joints", {4}, 0.5 / 20 * 1.01},
               {"mass_scale", "top", {5}, 0.5 / 20 * 0.99},
               {"none", "", {6}, 0.0}};
-  d.effect_probabilities = {{"added_mass", "points:*", 0.53}, {"added_mass", "points:101", 0.5}};
+  d.effect_probabilities = {{model::EffectKind::kAddedMass, "points:*", 0.53},
+                            {model::EffectKind::kAddedMass, "points:101", 0.5}};
   const Findings f = FindingsOf(d, model::Model());
   ASSERT_EQ(f.lookalikes.size(), 2u);
   EXPECT_TRUE(f.lookalikes[0].holds_rank_one);

@@ -18,6 +18,7 @@ namespace ema::planning {
 namespace {
 
 namespace fs = std::filesystem;
+using model::EffectKind;
 
 // A simply supported uniform beam's first two bending modes, sin(πx/L) and sin(2πx/L), at
 // candidate points x = k/100 L. The two sensors that maximise det(ΦᵀΦ) — the information effective
@@ -150,8 +151,8 @@ TEST(PlanTest, BadInputNamesTheModelAndWhatWasExpected) {
     EXPECT_NE(std::string(e.what()).find("20 test points asked, but the model has 16"), std::string::npos) << e.what();
   }
   o = GuidewayOptions();
-  Reading other{"stiffness_scale on joints/J3", {{"stiffness_scale", "joints/J3", {{"factor", 0.5}}, std::nullopt, 0}}, "DIAG.json, candidate rank 1"};
-  Reading second{"added_mass on points:101", {{"added_mass", "points:101", {{"mass", 0.1}}, std::nullopt, 0}}, "DIAG.json, candidate rank 2"};
+  Reading other{"stiffness_scale on joints/J3", {{EffectKind::kStiffnessScale, "joints/J3", {{"factor", 0.5}}, std::nullopt, 0}}, "DIAG.json, candidate rank 1"};
+  Reading second{"added_mass on points:101", {{EffectKind::kAddedMass, "points:101", {{"mass", 0.1}}, std::nullopt, 0}}, "DIAG.json, candidate rank 2"};
   try {
     PlanTest(m, o, {other, second});
     FAIL() << "a reading of another model was accepted";
@@ -176,8 +177,8 @@ TEST(PlanTest, CandidatesMoveTheSensorsWhereMirrorReadingsDiffer) {
   const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "plan-mirror-frame";
   const testing::FrameFiles files = testing::WriteFrame(dir, spec);
   const model::Model m = formats::ReadModelFile(files.model);
-  Reading a{"added_mass on points:1005", {{"added_mass", "points:1005", {{"mass", 60.0}}, std::nullopt, 0}}, ""};
-  Reading b{"added_mass on points:1015", {{"added_mass", "points:1015", {{"mass", 60.0}}, std::nullopt, 0}}, ""};
+  Reading a{"added_mass on points:1005", {{EffectKind::kAddedMass, "points:1005", {{"mass", 60.0}}, std::nullopt, 0}}, ""};
+  Reading b{"added_mass on points:1015", {{EffectKind::kAddedMass, "points:1015", {{"mass", 60.0}}, std::nullopt, 0}}, ""};
   PlanOptions o;
   o.sensors_per_set = 6, o.sets = 1, o.references = 1, o.default_modes = 5;
   const TestPlan plan = PlanTest(m, o, {a, b});

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ema/acquisition/hammer_measurement.hpp"
+#include "ema/core/progress.hpp"
 
 namespace ema::acquisition {
 
@@ -60,8 +61,11 @@ struct ProcessedTest {
   std::vector<std::string> notes;
 };
 
-/// Runs the detectors and gates on every impact and picks the exponential window.
-ProcessedTest AnalyseImpacts(const HammerMeasurement& test, const ImpactOptions& options = {});
+/// Runs the detectors and gates on every impact and picks the exponential window. `progress` gets
+/// the share of records analysed ("impacts"), from the worker threads one call at a time; what it
+/// throws (a cancellation) stops the analysis and reaches the caller.
+ProcessedTest AnalyseImpacts(const HammerMeasurement& test, const ImpactOptions& options = {},
+                             const ProgressCallback& progress = {});
 
 /// Fills out[0..n) with the DC-free force record times the force window and the exponential window.
 void WindowForce(const TimeRecord& record, const ImpactAnalysis& analysis, double decay_rate, double* out);

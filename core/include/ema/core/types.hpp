@@ -127,20 +127,28 @@ struct FrfSet {
   int LineCount() const { return static_cast<int>(frequency_hz.size()); }
   int OutputCount() const { return static_cast<int>(outputs.size()); }
   int ReferenceCount() const { return static_cast<int>(references.size()); }
-  /// The nodes of each roving set (sets in order of their index, nodes in order of first output);
+  /// The response DOFs of each roving set (sets in order of their index, DOFs in output order);
   /// empty when the sets are unknown.
-  std::vector<std::vector<int>> RovingSetNodes() const {
-    std::vector<std::vector<int>> sets;
+  std::vector<std::vector<Dof>> RovingSets() const {
+    std::vector<std::vector<Dof>> sets;
     if (output_sets.empty() || output_sets.size() != outputs.size()) return sets;
     std::vector<int> ids(output_sets);
     std::sort(ids.begin(), ids.end());
     ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
     sets.resize(ids.size());
-    for (std::size_t o = 0; o < outputs.size(); ++o) {
-      std::vector<int>& nodes = sets[static_cast<std::size_t>(std::lower_bound(ids.begin(), ids.end(), output_sets[o]) - ids.begin())];
-      if (std::find(nodes.begin(), nodes.end(), outputs[o].node) == nodes.end()) nodes.push_back(outputs[o].node);
-    }
+    for (std::size_t o = 0; o < outputs.size(); ++o)
+      sets[static_cast<std::size_t>(std::lower_bound(ids.begin(), ids.end(), output_sets[o]) - ids.begin())].push_back(outputs[o]);
     return sets;
+  }
+  /// The nodes of each roving set (RovingSets, each node once, in order of first output).
+  std::vector<std::vector<int>> RovingSetNodes() const {
+    std::vector<std::vector<int>> nodes;
+    for (const std::vector<Dof>& set : RovingSets()) {
+      std::vector<int>& list = nodes.emplace_back();
+      for (const Dof& d : set)
+        if (std::find(list.begin(), list.end(), d.node) == list.end()) list.push_back(d.node);
+    }
+    return nodes;
   }
 };
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "ema/core/progress.hpp"
 #include "ema/core/types.hpp"
 #include "ema/curvefit/fit_data.hpp"
 #include "ema/curvefit/stabilisation.hpp"
@@ -38,8 +39,10 @@ struct SetPoles {
 /// (with window damping) and reports the corrected ones. Shapes are scaled to unit modal mass
 /// where a driving point exists, otherwise to unit largest component.
 /// With `set_poles`, each set's outputs are fitted with that set's poles (the participation
-/// factors stay common, so the shapes of all sets are scaled alike).
+/// factors stay common, so the shapes of all sets are scaled alike). `progress` gets the share done
+/// ("mode shapes"); what it throws (a cancellation) stops the fit and reaches the caller.
 LsfdResult EstimateModeShapes(const FitData& data, const std::vector<SelectedPole>& poles,
-                              const LsfdOptions& options = {}, const SetPoles* set_poles = nullptr);
+                              const LsfdOptions& options = {}, const SetPoles* set_poles = nullptr,
+                              const ProgressCallback& progress = {});
 
 }  // namespace ema::curvefit

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "ema/core/names.hpp"
+#include "ema/core/progress.hpp"
 #include "ema/curvefit/fit_data.hpp"
 #include "ema/curvefit/stabilisation.hpp"
 
@@ -135,9 +136,11 @@ struct MlRefineResult {
 /// Refines `poles` (their lambda_fitted) against `data`. Never throws for numerical trouble: the
 /// summary says what happened and, when not usable, the poles are returned unchanged (σ still
 /// computed at the PolyMAX poles where possible). Throws InputError when there are fewer lines
-/// than unknowns per FRF.
+/// than unknowns per FRF. `progress` gets the share of the iteration limit used, at the start and
+/// after each Levenberg-Marquardt iteration; what it throws (a cancellation) stops the solver
+/// and reaches the caller.
 MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedPole>& poles,
-                                const MlRefineOptions& options = {});
+                                const MlRefineOptions& options = {}, const ProgressCallback& progress = {});
 
 /// Standard deviations of f = |lambda|/2pi and zeta = -Re lambda/|lambda| from the covariance of
 /// (Re lambda, Im lambda) (first-order propagation).

@@ -68,7 +68,9 @@ struct PolymaxTiming {
 double ThreadCpuSeconds();
 
 /// Runs pLSCF on `data` for orders order_min..order_max. Throws InputError when there are fewer
-/// lines than the requested order needs.
+/// lines than the requested order needs. `progress` gets the share of orders done, from the
+/// per-order worker threads one at a time; what it throws stops every worker at its next order and
+/// is rethrown here.
 StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& options,
                                    const ProgressCallback& progress = {}, PolymaxTiming* timing = nullptr);
 

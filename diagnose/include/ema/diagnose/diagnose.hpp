@@ -125,7 +125,7 @@ struct DiagnoseOptions {
 
 /// One fitted parameter with its posterior 1σ.
 struct FittedParameter {
-  std::string effect_kind;
+  model::EffectKind effect_kind = model::EffectKind::kSeriesCompliance;
   std::string target;
   std::string name;      ///< "k" (series_compliance: the law's k), "factor", "value", "mass", "modulus"
   double value = kNaN;
@@ -172,7 +172,9 @@ struct ModeComparison {
 struct Candidate {
   std::vector<model::Effect> effects;       ///< with fitted parameters; empty for "none"
   std::vector<FittedParameter> parameters;
-  std::string kind;                         ///< "none", an effect kind, or "kind1+kind2"
+  /// A label of the combination, for people and JSON: "none", an effect kind's name, or
+  /// "kind1+kind2". Decisions go by `effects` (IsNone), never by this text.
+  std::string kind;
   std::string target;                       ///< "" for none, "t1+t2" for several
   double cost = kNaN;                       ///< robust sum of squared residuals in σ
   double log_prior = 0.0;                   ///< log prior density at the fitted parameters
@@ -202,6 +204,9 @@ struct Candidate {
   std::string error;                        ///< non-empty when the candidate could not be evaluated
   int rank = 0;                             ///< 1 = most likely
   Eigen::VectorXd residuals;                ///< weighted residuals, for the tie test
+
+  /// The model as given: no effect added.
+  bool IsNone() const { return effects.empty(); }
 };
 
 /// The error falling as rank 1's effects are added one at a time (each subset re-fitted).
@@ -218,7 +223,7 @@ struct Step {
 /// Where the data cannot tell which member or point (several near-equal candidates), the
 /// wildcard's probability is the one to read.
 struct EffectProbability {
-  std::string kind;
+  model::EffectKind kind = model::EffectKind::kSeriesCompliance;
   std::string target;
   double probability = 0.0;
 };
@@ -232,13 +237,20 @@ std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>&
 
 /// Candidates that are one reading on different members or points (the same kinds on the same
 /// groups): the data tell them apart only by which member or point, so reports show them as one
-/// row. `target` joins the wildcard targets ("joints/*", "points:*") with '+'.
+/// row. `kind` is the candidates' label ("none", "kind1+kind2"; decide by their effects), `target`
+/// joins the wildcard targets ("joints/*", "points:*") with '+'.
 struct CandidateGroup {
   std::string kind;
   std::string target;
   std::vector<int> ranks;   ///< ranks of its candidates, best first
   double probability = 0.0; ///< summed over them
 };
+
+/// The look-alike rule (docs/diagnose.md "Look-alikes"): a reading of probability `p` is a
+/// look-alike of rank 1 (probability `p_first`) when it is within a factor 20 of it and at least
+/// 0.1 % probable — the readings these data cannot separate from rank 1.
+inline constexpr double kLookAlikeFactor = 20.0;
+inline bool IsLookAlike(double p, double p_first) { return p >= p_first / kLookAlikeFactor && p >= 0.001; }
 
 /// The groups of look-alike candidates, in the order of their best rank (failed candidates left out).
 std::vector<CandidateGroup> GroupCandidates(const std::vector<Candidate>& ranked);

@@ -76,7 +76,9 @@ struct FrfResult {
 };
 
 /// Estimates every FRF of the test. Throws InputError (file, record, reasons) when every impact
-/// of an FRF is rejected.
+/// of an FRF is rejected. `progress`: the impacts analysed (the first half), the spectra done
+/// ("FRF"), 1 at the end; called from the worker threads one call at a time, and what it throws
+/// (a cancellation) stops every worker and reaches the caller.
 FrfResult EstimateFrfs(const acquisition::HammerMeasurement& test, const FrfOptions& options = {},
                        const ProgressCallback& progress = {});
 

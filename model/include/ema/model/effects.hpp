@@ -1,8 +1,9 @@
 // Effects: physical phenomena added on top of the base model (model-format.md, "Effects").
-// Every kind is one row of a typed table (EffectKindTable): its enum, the name used in model
-// files, its free parameter, the range diagnosis searches, its default prior and the function
-// that applies it to a Model. ApplyEffect dispatches through the table; nothing else switches on
-// kind strings.
+// Every kind is one row of a typed table (EffectKindTable): its enum (model::EffectKind), the name
+// used in model files and JSON, its free parameter, the range diagnosis searches, its default prior
+// and the function that applies it to a Model. ApplyEffect dispatches through the table. A kind's
+// name is read into an EffectKind once, where text enters (FindEffectKind: the model file, DIAG.json,
+// Python's priors), and written once, through the table (KindName); nothing else compares kind names.
 //  * series_compliance(group | group/member, law): every spring of the target gets `law` in
 //    series (a series chain is extended, so an air-film chain re-solves its equilibrium);
 //  * stiffness_scale(group | group/member, factor): linearised stiffness of the springs x factor;
@@ -22,8 +23,6 @@
 #include "ema/model/model.hpp"
 
 namespace ema::model {
-
-enum class EffectKind { kSeriesCompliance, kStiffnessScale, kOperatingPoint, kAddedMass, kMassScale, kGroundSpring };
 
 /// What an effect's target names.
 enum class EffectTarget {
@@ -60,13 +59,16 @@ struct EffectKindInfo {
 
 /// Every kind of the vocabulary, in the order of model-format.md.
 const std::vector<EffectKindInfo>& EffectKindTable();
-/// The row of a kind; nullptr for a name that is not in the vocabulary.
+/// The row of a kind's name; nullptr for a name that is not in the vocabulary (the one parser of
+/// a kind's name).
 const EffectKindInfo* FindEffectKind(const std::string& name);
 const EffectKindInfo& Info(EffectKind kind);
+/// The kind's name in model files and JSON ("series_compliance"): Info(kind).name.
+std::string KindName(EffectKind kind);
 
 /// Applies one effect to a copy of `model` (model.effects is left as it is). Throws InputError
-/// naming the effect when the kind is unknown, the target does not exist or does not apply, or a
-/// parameter is missing or out of range.
+/// naming the effect when the target does not exist or does not apply, or a parameter is missing
+/// or out of range.
 Model ApplyEffect(const Model& model, const Effect& effect);
 
 /// Applies the model's own pending [[effect]] blocks in order and clears model.effects.
@@ -80,7 +82,7 @@ Model ApplyEffects(const Model& model);
 /// spring stiffness.
 std::vector<Effect> CandidateEffects(const Model& model);
 
-/// The effect kinds of the vocabulary, in the order of model-format.md.
+/// The names of the effect kinds of the vocabulary, in the order of model-format.md.
 const std::vector<std::string>& EffectKinds();
 
 /// "kind target k=v ..." for messages and reports.

@@ -173,11 +173,18 @@ struct Setup {
   int line = 0;
 };
 
+/// The kinds of effect of the vocabulary (model-format.md "Effects"), in its order. Their names
+/// ("series_compliance", ...) live once, in model::EffectKindTable (effects.hpp): text is parsed
+/// into a kind where it enters (model file, DIAG.json) and printed through that table.
+enum class EffectKind { kSeriesCompliance, kStiffnessScale, kOperatingPoint, kAddedMass, kMassScale, kGroundSpring };
+/// A kind goes into JSON by its name, never as its number: nlohmann::json, which would otherwise
+/// write an enum's integer without a word, finds this deleted overload (by argument-dependent lookup).
+template <typename Json>
+void to_json(Json& json, EffectKind kind) = delete;
+
 /// An effect of the vocabulary (model-format.md): kind, target, parameters and optional law.
-/// Kinds: series_compliance, stiffness_scale, operating_point, added_mass, mass_scale,
-/// ground_spring.
 struct Effect {
-  std::string kind;
+  EffectKind kind = EffectKind::kSeriesCompliance;  ///< always set by whoever makes the effect
   std::string target;
   std::map<std::string, double> parameters;  ///< factor, value, mass, k (per kind)
   /// series_compliance: the law in series. Without a law, parameters["k"] means a linear law
@@ -249,8 +256,8 @@ struct Model {
   std::vector<Effect> effects;
   FeMatrices fe;
   /// [priors]: default prior 1σ per effect kind where an item has no `uncertainty`
-  /// (model-format.md "Prior knowledge"); keys are effect kind names.
-  std::map<std::string, double> priors;
+  /// (model-format.md "Prior knowledge").
+  std::map<EffectKind, double> priors;
   /// [priors] stiffness_fault_share / stiffness_fault_width (model-format.md, added turn 4): the
   /// fault tail of a stiffness factor's prior, overriding DiagnoseOptions' defaults when given.
   std::optional<double> stiffness_fault_share, stiffness_fault_width;

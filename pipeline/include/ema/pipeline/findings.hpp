@@ -44,7 +44,7 @@ enum class GroupSpan {
 /// The span of `group` among `diagnosis`'s candidates (the effects that differ from its best one's).
 GroupSpan SpanOf(const diagnose::Diagnosis& diagnosis, const diagnose::CandidateGroup& group);
 
-/// A group of readings within a factor 20 of rank 1's probability (docs/diagnose.md "Look-alikes").
+/// A group of readings within a factor 20 of rank 1's probability (diagnose::IsLookAlike).
 struct LookAlike {
   std::string kind, target;   ///< the group's kinds and wildcard targets ("joints/*", "points:*")
   int readings = 0;           ///< readings of the group other than rank 1
@@ -99,9 +99,5 @@ struct Findings {
 /// The findings of `diagnosis` of `model` (the nominal model: rank 1's springs are re-solved with
 /// its effects for SpringStiffness).
 Findings FindingsOf(const diagnose::Diagnosis& diagnosis, const model::Model& model);
-
-/// The look-alike rule: readings within this factor of rank 1's probability are reported as
-/// look-alikes (and at least 0.1 % probable).
-inline constexpr double kLookAlikeFactor = 20.0;
 
 }  // namespace ema::pipeline

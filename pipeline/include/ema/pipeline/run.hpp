@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -18,6 +19,7 @@
 #include "ema/frf/quality.hpp"
 #include "ema/model/solve.hpp"
 #include "ema/pipeline/stages.hpp"
+#include "ema/planning/plan.hpp"
 
 namespace ema::pipeline {
 
@@ -89,12 +91,24 @@ struct RunProblem {
   std::string error;       ///< the error's message
 };
 
+/// When rank 1 has look-alikes: the test that would tell them apart — one more roving set beside
+/// a test's own sets and references, chosen to separate the readings (`ema plan --candidates
+/// --keep`, docs/plan.md).
+struct NextTest {
+  int test = 0;                       ///< the test it extends (its setup, roving sets, references)
+  std::vector<std::string> readings;  ///< the readings it separates ("kind on target"), rank 1 first
+  planning::TestPlan plan;            ///< the test's own sets first (`kept_sets` of them), then the new one
+  int kept_sets = 0;
+};
+
 struct RunResult {
   RunPlan plan;
   std::optional<model::Model> nominal;         ///< the model as given; empty when it cannot be read
   std::string nominal_error;
   std::vector<TestResult> tests;               ///< one per plan.project.tests
   std::optional<DiagnoseStage> diagnosis;      ///< over every test with modes
+  std::optional<NextTest> next_test;           ///< when rank 1 has look-alikes and a test could be planned
+  std::string next_test_error;                 ///< why it could not be planned ("" otherwise)
   std::vector<StepRecord> steps;               ///< every step, in the order run
   std::vector<RunProblem> problems;
   /// Mean agreement (%) and MAC over the tests' correlations with the nominal and the updated
@@ -116,6 +130,14 @@ struct RunResult {
 /// need it are skipped, the others run. `progress` gets the share of steps done and the step's
 /// name. Throws RunStopped (from the pick hook) and nothing else.
 RunResult Run(const RunPlan& plan, const ProgressCallback& progress = {});
+
+/// The test that tells rank 1's look-alikes apart (Run calls it after the diagnosis): rank 1 and
+/// the candidates diagnose::IsLookAlike keeps (at most 10), separated by one more roving set beside
+/// the first test with modes — its own sets and references kept, the new set as large as its
+/// largest (triaxial when it measured whole points). nullopt when rank 1 has no look-alike.
+/// InputError/UsageError from planning::PlanTest when the plan cannot be made.
+std::optional<NextTest> PlanNextTest(const model::Model& model, const formats::Project& project,
+                                     const std::vector<TestResult>& tests, const diagnose::Diagnosis& diagnosis);
 
 /// "frf", "fit", "model (nominal)", ...: a step's name.
 std::string StepName(StepKind kind);
