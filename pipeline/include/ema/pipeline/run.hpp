@@ -128,7 +128,8 @@ struct RunResult {
 /// Runs the plan: per test frf → fit → model → correlate, then the diagnosis over all tests, then
 /// per test model → correlate with the updated model. A failed step is recorded, the steps that
 /// need it are skipped, the others run. `progress` gets the share of steps done and the step's
-/// name. Throws RunStopped (from the pick hook) and nothing else.
+/// name. Throws RunStopped (from the pick hook) and what `progress` throws (ema::Cancelled:
+/// Python's Ctrl-C); a failing step is recorded, never thrown.
 RunResult Run(const RunPlan& plan, const ProgressCallback& progress = {});
 
 /// The test that tells rank 1's look-alikes apart (Run calls it after the diagnosis): rank 1 and
