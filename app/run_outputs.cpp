@@ -122,9 +122,8 @@ FrfConfig RunFrfConfig(const pipeline::RunResult& run, std::size_t test) {
 }
 
 FitConfig RunFitConfig(const pipeline::RunResult& run, std::size_t test) {
-  const formats::ProjectTest& t = run.plan.project.tests[test];
   FitConfig config;
-  config.input = t.frf ? t.frf->string() : (TestDir(run, test) / "frf.unv").string();
+  config.input = run.FrfPath(test).string();
   config.output = run.ModesPath(test).string();
   config.json_path = (TestDir(run, test) / "modes.json").string();
   config.stabilisation_path = (TestDir(run, test) / "stabilisation.json").string();

@@ -325,9 +325,7 @@ ReportInput ReportInputOf(const pipeline::RunResult& run, const RunPage& page) {
     s.name = test.name;
     if (r.frf) s.frf_summary = formats::FrfSummaryJson(r.frf->result);
     if (r.fit && r.frfs) {
-      s.stabilisation = pipeline::FitStabilisationJson(*r.fit, *r.frfs, run.plan.project.tests[t].frf
-                                                                          ? run.plan.project.tests[t].frf->string()
-                                                                          : (run.plan.output_dir / test.name / "frf.unv").string());
+      s.stabilisation = pipeline::FitStabilisationJson(*r.fit, *r.frfs, run.FrfPath(t).string());
       s.fit = r.fit->fit;
       s.refine = r.fit->options.refine;
       s.selection = {{"select", SelectText(r.fit->options.select_frequencies_hz)},

@@ -180,6 +180,11 @@ RunPlan PlanFromProject(formats::Project project, std::filesystem::path output_d
   return plan;
 }
 
+std::filesystem::path RunResult::FrfPath(std::size_t test) const {
+  const formats::ProjectTest& t = plan.project.tests[test];
+  return t.frf ? *t.frf : plan.output_dir / t.name / "frf.unv";
+}
+
 std::filesystem::path RunResult::ModesPath(std::size_t test) const {
   return plan.output_dir / plan.project.tests[test].name / "modes.unv";
 }
@@ -212,7 +217,7 @@ RunResult Run(const RunPlan& plan, const ProgressCallback& progress) {
     const formats::ProjectTest& test = project.tests[t];
     TestResult& r = result.tests[t];
     const int ti = static_cast<int>(t);
-    const std::string frf_source = test.frf ? test.frf->string() : (plan.output_dir / test.name / "frf.unv").string();
+    const std::string frf_source = result.FrfPath(t).string();
     auto frfs = [&]() -> const FrfSet& {
       if (!r.frfs) r.frfs = formats::ReadFrfSet(*test.frf);  // the FRFs the project gives
       return *r.frfs;
@@ -331,8 +336,7 @@ RunResult Run(const RunPlan& plan, const ProgressCallback& progress) {
       r.quality_options.band_hi_hz = band.band_hi_hz;
     }
     try {
-      const std::string source = test.frf ? test.frf->string() : (plan.output_dir / test.name / "frf.unv").string();
-      r.quality = frf::CheckFrfQuality({*r.frfs}, r.quality_options, {source});
+      r.quality = frf::CheckFrfQuality({*r.frfs}, r.quality_options, {result.FrfPath(t).string()});
     } catch (const std::exception& e) {
       result.problems.push_back({static_cast<int>(t), "data-quality checks", e.what()});
     }

@@ -119,6 +119,9 @@ struct RunResult {
 
   /// The updated model's file name in output_dir ("updated-model.toml").
   std::filesystem::path UpdatedModelPath() const { return plan.output_dir / "updated-model.toml"; }
+  /// The FRFs a test's fit reads: the project's FRF file, else the one the run estimates
+  /// (OUTDIR/<test>/frf.unv).
+  std::filesystem::path FrfPath(std::size_t test) const;
   /// A test's modes file (OUTDIR/<test>/modes.unv).
   std::filesystem::path ModesPath(std::size_t test) const;
   /// True when every step is done or given and no problem was met.
