@@ -1,5 +1,6 @@
-// libFuzzer target: every JSON writer of a result type (formats/json_codecs.hpp, the quality and
-// amplitude JSON of app/) given a typed result decoded from the fuzzer's bytes — texts of any
+// libFuzzer target: every JSON writer of a result type (formats/json_codecs.hpp, the quality,
+// amplitude and plan JSON of formats/, and the pipeline's: the findings, DIAG.json whole and a run's
+// result, pipeline/json.hpp) given a typed result decoded from the fuzzer's bytes — texts of any
 // bytes (non-UTF-8, NUL), NaN/±Inf/denormal/huge numbers, empty and large sets — must return JSON
 // whose dump() succeeds and parses back. A crash, UBSan report, leak or any exception is a finding
 // (the writers throw nothing, not even an InputError: their input is typed).
@@ -12,6 +13,7 @@
 #include "ema/formats/plan_json.hpp"
 #include "ema/formats/quality_json.hpp"
 #include "ema/model/effects.hpp"
+#include "ema/pipeline/json.hpp"
 #include "json_fuzz_gen.hpp"
 
 namespace {
@@ -113,11 +115,49 @@ ema::diagnose::Candidate MakeCandidate(Gen& g) {
   c.reduced_chi2 = g.Double();
   c.noise_consistent = g.Bool();
   c.flags = g.Texts(3);
+  c.model_error = {g.Double(), g.Double(), g.Double(), g.Bool()};
   c.reduced_model = g.Bool();
   c.tied_with = g.Texts(3);
   c.error = g.Bool() ? g.Text() : "";
   c.rank = g.AnyInt();
   return c;
+}
+
+ema::diagnose::Diagnosis MakeDiagnosis(Gen& g) {
+  using namespace ema;
+  diagnose::Diagnosis d;
+  d.baseline = MakeCandidate(g);
+  d.candidates.resize(g.Count(8));
+  for (auto& c : d.candidates) c = MakeCandidate(g);
+  d.steps.resize(g.Count(5));
+  for (auto& s : d.steps) s = {g.Text(), g.Double(), g.Double(), g.Double()};
+  d.effect_probabilities.resize(g.Count(6));
+  for (auto& e : d.effect_probabilities) e = {Kind(g), g.Text(), g.Double()};
+  d.groups.resize(g.Count(4));
+  for (auto& gr : d.groups) {
+    gr.kind = KindLabel(g);
+    gr.target = g.Text();
+    for (std::size_t n = g.Count(4); n > 0; --n) gr.ranks.push_back(g.AnyInt());
+    gr.probability = g.Double();
+  }
+  d.explanation = g.Text();
+  d.residual_count = g.AnyInt();
+  d.test_mode_count = g.AnyInt();
+  d.model_solves = g.AnyInt();
+  d.candidates_screened = g.AnyInt();
+  return d;
+}
+
+ema::diagnose::DiagnoseOptions MakeDiagnoseOptions(Gen& g) {
+  using namespace ema;
+  diagnose::DiagnoseOptions o;
+  o.criterion = static_cast<diagnose::Criterion>(g.Int(0, 2));
+  o.frequency_floor = g.Double();
+  o.shape_sigma = g.Double();
+  o.max_effects = g.AnyInt();
+  o.members = g.Bool();
+  o.pairing.mac_min = g.Double();
+  return o;
 }
 
 ema::curvefit::ModalModel MakeModalModel(Gen& g) {
@@ -198,6 +238,242 @@ ema::curvefit::FitResult MakeFit(Gen& g) {
   return f;
 }
 
+ema::frf::FrfResult MakeFrfResult(Gen& g) {
+  using namespace ema;
+  frf::FrfResult r;
+  auto& s = r.summary;
+  s.frfs.resize(g.Count(300));
+  for (auto& e : s.frfs) {
+    e.response = g.AnyDof();
+    e.reference = g.AnyDof();
+    e.averages = g.AnyInt();
+    e.rejected.resize(g.Count(4));
+    for (auto& x : e.rejected) {
+      x.impact = g.AnyInt();
+      x.set = g.Text();
+      x.reason = g.Text();
+    }
+  }
+  s.estimator = static_cast<frf::Estimator>(g.Int(0, 2));
+  s.window_decay_rate = g.Double();
+  s.roving_hammer = g.Bool();
+  s.impacts = g.AnyInt();
+  s.rejected_impacts = g.AnyInt();
+  s.notes = g.Texts(8);
+  r.frfs.frequency_hz = g.Vector(g.Count(2000));
+  return r;
+}
+
+// Unpaired modes index `test` and `model` (the writer reads their frequencies).
+ema::correlation::CorrelationResult MakeCorrelation(Gen& g, const ema::ModeSet& test, const ema::ModeSet& model) {
+  using namespace ema;
+  correlation::CorrelationResult r;
+  r.rows.resize(g.Count(40));
+  for (auto& row : r.rows) {
+    row.test_mode = g.Int(-1, 100000);  // indices: only printed (+1)
+    row.model_mode = g.Int(-1, 100000);
+    row.test_frequency_hz = g.Double();
+    row.test_damping_ratio = g.Double();
+    row.model_frequency_hz = g.Double();
+    row.agreement_pct = g.Double();
+    row.frequency_error_pct = g.Double();
+    row.mac = g.Double();
+    row.remark = g.Text();
+  }
+  // Unpaired modes index their sets (the writer reads their frequencies).
+  if (!test.modes.empty())
+    for (std::size_t n = g.Count(10); n > 0; --n) r.pairing.unpaired_test.push_back(g.Int(0, static_cast<int>(test.modes.size()) - 1));
+  if (!model.modes.empty())
+    for (std::size_t n = g.Count(10); n > 0; --n) r.pairing.unpaired_model.push_back(g.Int(0, static_cast<int>(model.modes.size()) - 1));
+  r.pairing.pairs.resize(g.Count(10));
+  r.mean_agreement_pct = g.Double();
+  r.min_agreement_pct = g.Double();
+  r.mean_mac = g.Double();
+  r.mean_abs_frequency_error_pct = g.Double();
+  r.shared_dof_count = g.AnyInt();
+  r.test_dof_count = g.AnyInt();
+  r.comac.resize(g.Count(50));
+  for (auto& c : r.comac) c = {g.AnyDof(), g.Double()};
+  r.mac.resize(static_cast<Eigen::Index>(g.Count(30)), static_cast<Eigen::Index>(g.Count(30)));
+  for (Eigen::Index k = 0; k < r.mac.size(); ++k) r.mac.data()[k] = g.Double();
+  return r;
+}
+
+ema::correlation::AmplitudeResult MakeAmplitude(Gen& g) {
+  using namespace ema;
+  correlation::AmplitudeResult r;
+  r.level_kind = static_cast<correlation::LevelKind>(g.Int(0, 2));
+  r.levels = g.Doubles(10);
+  r.modes.resize(g.Count(20));
+  for (auto& m : r.modes) {
+    m.points.resize(1 + g.Count(6));  // a mode is followed over >= 1 level; target_point indexes them
+    for (auto& p : m.points) {
+      p.level = g.Double();
+      p.frequency_hz = g.Double();
+      p.damping_ratio = g.Double();
+      p.frequency_std_hz = g.Double();
+      p.damping_ratio_std = g.Double();
+      p.mode_index = g.AnyInt();
+      p.poles = g.AnyInt();
+    }
+    m.frequency_trend = static_cast<correlation::FrequencyTrend>(g.Int(0, 3));
+    m.damping_trend = static_cast<correlation::DampingTrend>(g.Int(0, 2));
+    m.frequency_change_pct = g.Double();
+    m.damping_ratio_factor = g.Double();
+    m.target_point = g.Int(0, static_cast<int>(m.points.size()) - 1);
+    m.frequency_slope_z = g.Double();
+    m.frequency_extreme_z = g.Double();
+    m.damping_slope_z = g.Double();
+    m.reading = g.Text();
+  }
+  r.summary = g.Text();
+  return r;
+}
+
+ema::diagnose::ModeComparison MakeModeComparison(Gen& g) {
+  ema::diagnose::ModeComparison m;
+  m.setup = g.Text();
+  m.test_mode = g.Int(-1, 100000);
+  m.model_mode = g.Int(-1, 100000);
+  m.test_frequency_hz = g.Double();
+  m.model_frequency_hz = g.Double();
+  m.agreement_pct = g.Double();
+  m.mac = g.Double();
+  m.sigma_hz = g.Double();
+  m.frequency_misfit_sigma = g.Double();
+  m.shape_misfit_sigma = g.Double();
+  return m;
+}
+
+// The first screen as numbers (pipeline::FindingsOf's result): only "effects" reaches the JSON,
+// the rest is filled too so that a writer reading it is caught.
+ema::pipeline::Findings MakeFindings(Gen& g) {
+  using namespace ema;
+  pipeline::Findings f;
+  f.effects.resize(g.Count(6));
+  for (auto& e : f.effects) {
+    e.effect = MakeEffect(g);
+    e.parameters.resize(g.Count(4));
+    for (auto& p : e.parameters) {
+      p.effect_kind = Kind(g);
+      p.target = g.Text();
+      p.name = g.Text();
+      p.value = g.Double();
+      p.sigma = g.Double();
+    }
+    e.probability = g.Double();
+    if (g.Bool()) e.wildcard = g.Text();
+    e.wildcard_probability = g.Double();
+    e.springs.resize(g.Count(6));
+    for (auto& sp : e.springs) sp = {g.Text(), g.Double(), g.Double()};
+  }
+  f.rank_one_probability = g.Double();
+  f.certain_among_tried_only = g.Bool();
+  f.adequate = g.Bool();
+  f.reduced_chi2 = g.Double();
+  f.test_modes = g.AnyInt();
+  f.model_inadequate = g.Bool();
+  f.model_error = {g.Double(), g.Double(), g.Double(), g.Bool()};
+  f.lookalikes.resize(g.Count(4));
+  for (auto& l : f.lookalikes) {
+    l.kind = g.Text();
+    l.target = g.Text();
+    l.readings = g.AnyInt();
+    l.holds_rank_one = g.Bool();
+    l.span = static_cast<pipeline::GroupSpan>(g.Int(0, 2));
+    l.probability = g.Double();
+  }
+  f.checks = g.Texts(3);
+  f.modes.resize(g.Count(20));
+  for (auto& m : f.modes) {
+    m.before = MakeModeComparison(g);
+    m.after = MakeModeComparison(g);
+    m.paired_before = g.Bool();
+    m.paired_after = g.Bool();
+    m.share_pct = g.Double();
+    m.verdict = static_cast<pipeline::ModeVerdict>(g.Int(0, 3));
+  }
+  if (!f.modes.empty())
+    for (std::size_t n = g.Count(3); n > 0; --n) f.worst_modes.push_back(g.Int(0, static_cast<int>(f.modes.size()) - 1));
+  return f;
+}
+
+// `ema diagnose`'s stage: DIAG.json whole (pipeline::DiagnosisJson).
+ema::pipeline::DiagnoseStage MakeDiagnoseStage(Gen& g) {
+  ema::pipeline::DiagnoseStage stage;
+  stage.diagnosis = MakeDiagnosis(g);
+  stage.options = MakeDiagnoseOptions(g);
+  stage.findings = MakeFindings(g);
+  if (g.Bool()) stage.nonlinearity = MakeAmplitude(g);
+  return stage;
+}
+
+// A run (pipeline::RunResult): one TestResult per project test; steps and problems index the
+// tests or are -1 (the diagnosis); a test's correlations go with its fit's modes (RunResult's
+// invariants, which the writer relies on).
+ema::pipeline::RunResult MakeRunResult(Gen& g) {
+  using namespace ema;
+  pipeline::RunResult run;
+  formats::Project& project = run.plan.project;
+  project.name = g.Text();
+  project.model = g.Text();
+  project.tests.resize(g.Count(4));
+  for (auto& t : project.tests) {
+    t.name = g.Text();
+    t.setup = g.Text();
+  }
+  run.tests.resize(project.tests.size());
+  for (auto& t : run.tests) {
+    if (g.Bool()) t.frf = pipeline::FrfStage{MakeFrfResult(g), {}, g.AnyInt()};
+    if (g.Bool()) {
+      FrfSet frfs;
+      frfs.outputs = g.Dofs(200);
+      frfs.references = g.Dofs(3);
+      frfs.output_sets.resize(g.Bool() ? frfs.outputs.size() : g.Count(frfs.outputs.size() + 2));
+      for (int& s : frfs.output_sets) s = g.AnyInt();
+      t.frfs = std::move(frfs);
+    }
+    t.fit_options.select_frequencies_hz = g.Doubles(6);
+    t.picked_by_hand = g.Bool();
+    if (g.Bool()) {
+      pipeline::FitStage fit;
+      fit.fit = MakeFit(g);
+      fit.stored_modes = g.Modes(40, 20, 400);
+      t.fit = std::move(fit);
+    }
+    const ModeSet empty;
+    const ModeSet& test_modes = t.fit ? t.fit->stored_modes : empty;
+    if (g.Bool()) {
+      model::Solution s;
+      s.modes = g.Modes(40, 20, 400);
+      t.model_before = std::move(s);
+      if (g.Bool()) t.correlation_before = MakeCorrelation(g, test_modes, t.model_before->modes);
+    }
+    if (g.Bool()) {
+      model::Solution s;
+      s.modes = g.Modes(40, 20, 400);
+      t.model_after = std::move(s);
+      if (g.Bool()) t.correlation_after = MakeCorrelation(g, test_modes, t.model_after->modes);
+    }
+  }
+  if (g.Bool()) run.diagnosis = MakeDiagnoseStage(g);
+  const int tests = static_cast<int>(project.tests.size());
+  run.steps.resize(g.Count(20));
+  for (auto& s : run.steps) {
+    s.kind = static_cast<pipeline::StepKind>(g.Int(0, 6));
+    s.test = g.Int(-1, tests - 1);
+    s.status = static_cast<pipeline::StepStatus>(g.Int(0, 3));
+    s.error = g.Text();
+  }
+  run.problems.resize(g.Count(5));
+  for (auto& p : run.problems) p = {g.Int(-1, tests - 1), g.Text(), g.Text()};
+  run.mean_agreement_before = g.Double();
+  run.mean_mac_before = g.Double();
+  run.mean_agreement_after = g.Double();
+  run.mean_mac_after = g.Double();
+  return run;
+}
+
 // Valid JSON text, and JSON that parses back.
 void Check(const json& j) {
   std::string text;
@@ -220,32 +496,8 @@ void Check(const json& j) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace ema;
   Gen g(data, size);
-  switch (g.Int(0, 13)) {
-    case 0: {
-      frf::FrfResult r;
-      auto& s = r.summary;
-      s.frfs.resize(g.Count(300));
-      for (auto& e : s.frfs) {
-        e.response = g.AnyDof();
-        e.reference = g.AnyDof();
-        e.averages = g.AnyInt();
-        e.rejected.resize(g.Count(4));
-        for (auto& x : e.rejected) {
-          x.impact = g.AnyInt();
-          x.set = g.Text();
-          x.reason = g.Text();
-        }
-      }
-      s.estimator = static_cast<frf::Estimator>(g.Int(0, 2));
-      s.window_decay_rate = g.Double();
-      s.roving_hammer = g.Bool();
-      s.impacts = g.AnyInt();
-      s.rejected_impacts = g.AnyInt();
-      s.notes = g.Texts(8);
-      r.frfs.frequency_hz = g.Vector(g.Count(2000));
-      Check(formats::FrfSummaryJson(r));
-      break;
-    }
+  switch (g.Int(0, 16)) {
+    case 0: Check(formats::FrfSummaryJson(MakeFrfResult(g))); break;
     case 1: {
       const ModeSet set = g.Modes(2000, 200, 4000);
       Check(formats::ModeSetJson(set));
@@ -282,36 +534,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     case 6: {
       const ModeSet test = g.Modes(20, 40, 400);
       const ModeSet model = g.Modes(20, 40, 400);
-      correlation::CorrelationResult r;
-      r.rows.resize(g.Count(40));
-      for (auto& row : r.rows) {
-        row.test_mode = g.Int(-1, 100000);  // indices: only printed (+1)
-        row.model_mode = g.Int(-1, 100000);
-        row.test_frequency_hz = g.Double();
-        row.test_damping_ratio = g.Double();
-        row.model_frequency_hz = g.Double();
-        row.agreement_pct = g.Double();
-        row.frequency_error_pct = g.Double();
-        row.mac = g.Double();
-        row.remark = g.Text();
-      }
-      // Unpaired modes index their sets (the writer reads their frequencies).
-      if (!test.modes.empty())
-        for (std::size_t n = g.Count(10); n > 0; --n) r.pairing.unpaired_test.push_back(g.Int(0, static_cast<int>(test.modes.size()) - 1));
-      if (!model.modes.empty())
-        for (std::size_t n = g.Count(10); n > 0; --n) r.pairing.unpaired_model.push_back(g.Int(0, static_cast<int>(model.modes.size()) - 1));
-      r.pairing.pairs.resize(g.Count(10));
-      r.mean_agreement_pct = g.Double();
-      r.min_agreement_pct = g.Double();
-      r.mean_mac = g.Double();
-      r.mean_abs_frequency_error_pct = g.Double();
-      r.shared_dof_count = g.AnyInt();
-      r.test_dof_count = g.AnyInt();
-      r.comac.resize(g.Count(50));
-      for (auto& c : r.comac) c = {g.AnyDof(), g.Double()};
-      r.mac.resize(static_cast<Eigen::Index>(g.Count(30)), static_cast<Eigen::Index>(g.Count(30)));
-      for (Eigen::Index k = 0; k < r.mac.size(); ++k) r.mac.data()[k] = g.Double();
-      Check(formats::CorrelationJson(r, test, model));
+      Check(formats::CorrelationJson(MakeCorrelation(g, test, model), test, model));
       break;
     }
     case 7: {
@@ -342,34 +565,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     case 8: Check(formats::EffectJson(MakeEffect(g))); break;
     case 9: {
-      diagnose::Diagnosis d;
-      d.baseline = MakeCandidate(g);
-      d.candidates.resize(g.Count(8));
-      for (auto& c : d.candidates) c = MakeCandidate(g);
-      d.steps.resize(g.Count(5));
-      for (auto& s : d.steps) s = {g.Text(), g.Double(), g.Double(), g.Double()};
-      d.effect_probabilities.resize(g.Count(6));
-      for (auto& e : d.effect_probabilities) e = {Kind(g), g.Text(), g.Double()};
-      d.groups.resize(g.Count(4));
-      for (auto& gr : d.groups) {
-        gr.kind = KindLabel(g);
-        gr.target = g.Text();
-        for (std::size_t n = g.Count(4); n > 0; --n) gr.ranks.push_back(g.AnyInt());
-        gr.probability = g.Double();
-      }
-      d.explanation = g.Text();
-      d.residual_count = g.AnyInt();
-      d.test_mode_count = g.AnyInt();
-      d.model_solves = g.AnyInt();
-      d.candidates_screened = g.AnyInt();
-      diagnose::DiagnoseOptions o;
-      o.criterion = static_cast<diagnose::Criterion>(g.Int(0, 2));
-      o.frequency_floor = g.Double();
-      o.shape_sigma = g.Double();
-      o.max_effects = g.AnyInt();
-      o.members = g.Bool();
-      o.pairing.mac_min = g.Double();
-      Check(formats::DiagnosisJson(d, o));
+      const diagnose::Diagnosis d = MakeDiagnosis(g);
+      Check(formats::DiagnosisJson(d, MakeDiagnoseOptions(g)));
       break;
     }
     case 10: {
@@ -466,35 +663,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       Check(formats::TestPlanJson(p, g.Bool()));
       break;
     }
-    default: {
-      correlation::AmplitudeResult r;
-      r.level_kind = static_cast<correlation::LevelKind>(g.Int(0, 2));
-      r.levels = g.Doubles(10);
-      r.modes.resize(g.Count(20));
-      for (auto& m : r.modes) {
-        m.points.resize(1 + g.Count(6));  // a mode is followed over >= 1 level; target_point indexes them
-        for (auto& p : m.points) {
-          p.level = g.Double();
-          p.frequency_hz = g.Double();
-          p.damping_ratio = g.Double();
-          p.frequency_std_hz = g.Double();
-          p.damping_ratio_std = g.Double();
-          p.mode_index = g.AnyInt();
-          p.poles = g.AnyInt();
-        }
-        m.frequency_trend = static_cast<correlation::FrequencyTrend>(g.Int(0, 3));
-        m.damping_trend = static_cast<correlation::DampingTrend>(g.Int(0, 2));
-        m.frequency_change_pct = g.Double();
-        m.damping_ratio_factor = g.Double();
-        m.target_point = g.Int(0, static_cast<int>(m.points.size()) - 1);
-        m.frequency_slope_z = g.Double();
-        m.frequency_extreme_z = g.Double();
-        m.damping_slope_z = g.Double();
-        m.reading = g.Text();
-      }
-      Check(formats::AmplitudeJson(r));
-      break;
-    }
+    case 13: Check(pipeline::FindingsJson(MakeFindings(g))); break;
+    case 14: Check(pipeline::DiagnosisJson(MakeDiagnoseStage(g))); break;  // DIAG.json
+    case 15: Check(pipeline::RunResultJson(MakeRunResult(g))); break;        // ema.run's result
+    default: Check(formats::AmplitudeJson(MakeAmplitude(g))); break;
   }
   return 0;
 }

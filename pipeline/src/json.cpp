@@ -20,13 +20,13 @@ using formats::NumberOrNull;
 json FitModesJson(const FitStage& stage, const FrfSet& frfs) {
   json out = formats::FitModesJson(stage.fit, stage.options.refine);
   out.update(formats::TestSetsJson(frfs));  // roving sets and hammer DOF, when known
-  return out;
+  return formats::ValidUtf8(std::move(out));
 }
 
 json FitStabilisationJson(const FitStage& stage, const FrfSet& frfs, const std::string& source) {
   json out = formats::StabilisationJson(stage.fit, stage.options.stability);
   formats::AddModeIndicatorsJson(&out, frfs, stage.options.data, source);  // CMIF/MMIF (docs/quality.md)
-  return out;
+  return formats::ValidUtf8(std::move(out));  // the source is a file name: any bytes
 }
 
 json FindingsJson(const Findings& findings) {
@@ -53,7 +53,7 @@ json FindingsJson(const Findings& findings) {
     if (!f.wildcard.empty()) j["any"] = {{"target", f.wildcard}, {"probability", f.wildcard_probability}};
     out.push_back(std::move(j));
   }
-  return out;
+  return formats::ValidUtf8(std::move(out));  // targets and setups are the model's texts
 }
 
 json DiagnosisJson(const DiagnoseStage& stage) {
@@ -71,7 +71,7 @@ json DiagnosisJson(const DiagnoseStage& stage) {
     nonlinearity["summary"] = stage.nonlinearity->summary;
     out["nonlinearity"] = std::move(nonlinearity);
   }
-  return out;
+  return formats::ValidUtf8(std::move(out));
 }
 
 json RunResultJson(const RunResult& run) {

@@ -1,6 +1,7 @@
 // The JSON of the pipeline's results, shared by `ema diagnose --json`, `ema run`'s diagnosis.json
 // and the Python package (one codec per result; the formats/ codecs of the numerical results
-// underneath).
+// underneath). Each returns its JSON through formats::ValidUtf8: `dump()` never throws on a label,
+// a target or a file name that is not UTF-8 (fuzz_json_results, docs/reliability.md).
 #pragma once
 
 #include <nlohmann/json.hpp>
