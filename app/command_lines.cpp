@@ -32,6 +32,14 @@ std::string ShellWord(const std::string& text) {
   return quoted + "'";
 }
 
+std::string CommandLine(const SimulateConfig& config) {
+  std::vector<std::string> w = {"simulate", ShellWord(config.model_path), "--plan", ShellWord(config.plan_path), "-o",
+                                ShellWord(config.output)};
+  if (!config.setup.empty()) w.insert(w.end(), {"--setup", ShellWord(config.setup)});
+  if (config.binary) w.push_back("--binary");
+  return Words(w);
+}
+
 std::string CommandLine(const FrfConfig& config) {
   std::vector<std::string> w = {"frf"};
   for (const std::string& input : config.inputs) w.push_back(ShellWord(input));

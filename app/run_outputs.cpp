@@ -8,6 +8,7 @@
 
 #include "ema/core/text.hpp"
 #include "ema/formats/atomic_file.hpp"
+#include "ema/formats/io.hpp"
 #include "report.hpp"
 #include "run_history.hpp"
 #include "words.hpp"
@@ -26,8 +27,8 @@ fs::path TestDir(const pipeline::RunResult& run, std::size_t test) {
 
 // "stud-5um-fit": a step's log name.
 std::string LogName(const pipeline::RunResult& run, const pipeline::StepRecord& step) {
-  static const char* const kSuffix[] = {"-frf", "-fit", "-model-before", "-correlate-before", "diagnose", "-model-after",
-                                        "-correlate-after"};
+  static const char* const kSuffix[] = {"-frf",         "-fit",           "-model-before",    "-correlate-before",
+                                        "diagnose",     "-model-after",   "-correlate-after", "-simulate"};
   const char* suffix = kSuffix[static_cast<int>(step.kind)];
   return step.test < 0 ? std::string(suffix) : run.plan.project.tests[static_cast<std::size_t>(step.test)].name + suffix;
 }
@@ -52,6 +53,17 @@ std::string WriteStep(const pipeline::RunResult& run, const pipeline::StepRecord
   const std::size_t t = static_cast<std::size_t>(step.test);
   const bool done = step.status == StepStatus::kDone;
   switch (step.kind) {
+    case StepKind::kSimulate: {
+      const SimulateConfig config = RunSimulateConfig(run, t);
+      out << "$ ema " << CommandLine(config) << "\n";
+      if (done) {
+        formats::WriteOptions binary;
+        binary.binary = config.binary;
+        formats::WriteTimeRecords(config.output, run.tests[t].simulated->records, binary);
+        out << SimulateSummary(*run.tests[t].simulated) << "\n";
+      }
+      break;
+    }
     case StepKind::kFrf: {
       const FrfConfig config = RunFrfConfig(run, t);
       out << "$ ema " << CommandLine(config) << "\n";
@@ -110,10 +122,22 @@ std::string Fixed(double value, int digits) { return FixedPoint(value, digits, "
 
 }  // namespace
 
+SimulateConfig RunSimulateConfig(const pipeline::RunResult& run, std::size_t test) {
+  const formats::ProjectTest& t = run.plan.project.tests[test];
+  SimulateConfig config;
+  config.model_path = (t.truth ? *t.truth : run.plan.project.model).string();
+  config.plan_path = t.plan ? t.plan->string() : std::string();
+  config.output = run.TimePath(test).string();
+  config.setup = t.setup;
+  config.binary = true;  // 58b: the records at full precision, as the run estimated them
+  return config;
+}
+
 FrfConfig RunFrfConfig(const pipeline::RunResult& run, std::size_t test) {
   const formats::ProjectTest& t = run.plan.project.tests[test];
   FrfConfig config;
   for (const fs::path& p : t.time) config.inputs.push_back(p.string());
+  if (t.plan) config.inputs.push_back(run.TimePath(test).string());
   config.output = (TestDir(run, test) / "frf.unv").string();
   config.json_path = (TestDir(run, test) / "frf.json").string();
   config.options = run.plan.project.frf;
@@ -181,6 +205,7 @@ std::vector<cli::PathArg> RunOutputs(const fs::path& out, const formats::Project
                              "correlation-after.json", "correlation-after.md"})
       add(d / name);
     if (!test.frf) add(d / "frf.unv"), add(d / "frf.json");
+    if (test.plan) add(d / "time.unv"), add(out / "logs" / (test.name + "-simulate.txt"));
     for (const char* step : {"-frf", "-fit", "-model-before", "-correlate-before", "-model-after", "-correlate-after"})
       add(out / "logs" / (test.name + step + ".txt"));
   }
@@ -253,6 +278,10 @@ std::string RunSummary(const pipeline::RunResult& run, const nlohmann::json& his
     std::snprintf(line, sizeof line, "  %-12s %5d %8d %6d  %-22s %-22s", project.tests[t].name.c_str(), frf_count, rejected,
                   modes, agreement(r.correlation_before).c_str(), agreement(r.correlation_after).c_str());
     lines.push_back(line);
+    if (project.tests[t].plan)  // a rehearsal: say that its data were simulated, and on what
+      lines.push_back("  " + std::string(12, ' ') + " simulated from " + project.tests[t].plan->filename().string() + " on " +
+                      (project.tests[t].truth ? project.tests[t].truth->filename().string() : "the project's model") +
+                      " (a rehearsal, not a measurement)");
     if (r.fit && r.picked_by_hand)  // a hand pick is kept only in this run: say how to repeat it
       lines.push_back("  " + std::string(12, ' ') + " poles picked by hand (ema pick); to repeat without the browser: " +
                       "select = \"" + report::SelectText(r.fit_options.select_frequencies_hz) + "\" in its [[test]]");

@@ -17,6 +17,7 @@
 namespace ema::app {
 
 /// Each step's config in a run (its files in OUTDIR/<test>/, as docs/project-file.md lists them).
+SimulateConfig RunSimulateConfig(const pipeline::RunResult& run, std::size_t test);
 FrfConfig RunFrfConfig(const pipeline::RunResult& run, std::size_t test);
 FitConfig RunFitConfig(const pipeline::RunResult& run, std::size_t test);
 ModelConfig RunModelConfig(const pipeline::RunResult& run, std::size_t test, bool updated);

@@ -203,6 +203,10 @@ std::optional<SimulateConfig> ParseSimulateArgs(const std::vector<std::string>& 
 /// Simulates the test `plan` of `model` and writes the time records (config.output).
 std::vector<TimeRecord> RunSimulateStage(const SimulateConfig& config, const model::Model& model, formats::Plan plan,
                                          std::ostream& out);
+/// `ema simulate MODEL --plan PLAN -o OUT [--setup S] [--binary]`.
+std::string CommandLine(const SimulateConfig& config);
+/// "simulated 480 records: 4 roving set(s), 1 reference(s), 5 impacts each, 8 modes".
+std::string SimulateSummary(const pipeline::SimulateStage& stage);
 
 // ---- ema plan ----
 

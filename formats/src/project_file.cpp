@@ -343,7 +343,7 @@ Project ReadProjectFile(const fs::path& path) {
   for (const toml::node& node : *tests) {
     const toml::table* t = node.as_table();
     if (!t) throw InputError(Where(file, node), "[[test]] must be a table");
-    CheckKeys(file, *t, {"setup", "name", "time", "frf", "sensor_mass", "select", "pick"}, "[[test]]");
+    CheckKeys(file, *t, {"setup", "name", "time", "frf", "plan", "truth", "sensor_mass", "select", "pick"}, "[[test]]");
     ProjectTest test;
     if ((*t)["setup"]) test.setup = String(file, *(*t)["setup"].node(), "setup");
     test.name = (*t)["name"] ? String(file, *(*t)["name"].node(), "name") : test.setup;
@@ -362,6 +362,12 @@ Project ReadProjectFile(const fs::path& path) {
       }
     }
     if (const toml::node* frf = (*t)["frf"].node()) test.frf = ExistingFile(file, *frf, "frf");
+    if (const toml::node* plan = (*t)["plan"].node()) test.plan = ExistingFile(file, *plan, "plan");
+    if (const toml::node* truth = (*t)["truth"].node()) {
+      if (!test.plan)
+        throw InputError(Where(file, *truth), "'truth' is the model a planned test is simulated on: give plan = \"PLAN.toml\" too");
+      test.truth = ExistingFile(file, *truth, "truth");
+    }
     if (const toml::node* m = (*t)["sensor_mass"].node()) {
       const std::optional<double> v = m->value<double>();
       if (!v || !(m->is_floating_point() || m->is_integer()) || !(*v >= 0.0) || !std::isfinite(*v) || *v > 1e3)
@@ -378,10 +384,12 @@ Project ReadProjectFile(const fs::path& path) {
       if (!v) throw InputError(Where(file, *pick), "'pick' must be true or false");
       test.pick = *v;
     }
-    if (test.time.empty() && !test.frf)
-      throw InputError(Where(file, *t), "[[test]] '" + test.name + "' needs time = [files] (or frf = \"FRF.unv\")");
-    if (!test.time.empty() && test.frf)
-      throw InputError(Where(file, *t), "[[test]] '" + test.name + "' gives both time and frf; keep one");
+    const int sources = (test.time.empty() ? 0 : 1) + (test.frf ? 1 : 0) + (test.plan ? 1 : 0);
+    if (sources == 0)
+      throw InputError(Where(file, *t), "[[test]] '" + test.name +
+                                            "' needs time = [files] (or frf = \"FRF.unv\", or plan = \"PLAN.toml\" to simulate it)");
+    if (sources > 1)
+      throw InputError(Where(file, *t), "[[test]] '" + test.name + "' gives more than one of time, frf and plan; keep one");
     project.tests.push_back(std::move(test));
   }
 

@@ -82,8 +82,19 @@ json RunResultJson(const RunResult& run) {
     auto correlation = [&](const std::optional<correlation::CorrelationResult>& c, const std::optional<model::Solution>& s) {
       return c && s && r.fit ? formats::CorrelationJson(*c, r.fit->stored_modes, s->modes) : json(nullptr);
     };
+    json simulated = nullptr;  // a rehearsal's simulated test (plan = "PLAN.toml")
+    if (r.simulated)
+      simulated = {{"plan", project.tests[t].plan ? project.tests[t].plan->string() : std::string()},
+                   {"truth", (project.tests[t].truth ? *project.tests[t].truth : project.model).string()},
+                   {"records", r.simulated->records.size()},
+                   {"sets", r.simulated->sets},
+                   {"references", r.simulated->references},
+                   {"impacts_per_reference", r.simulated->impacts_per_reference},
+                   {"in_time", r.simulated->in_time},
+                   {"undamped", r.simulated->undamped}};
     tests.push_back({{"name", project.tests[t].name},
                      {"setup", project.tests[t].setup},
+                     {"simulated", std::move(simulated)},
                      {"frf", r.frf ? formats::FrfSummaryJson(r.frf->result) : json(nullptr)},
                      {"modes", r.fit && r.frfs ? FitModesJson(*r.fit, *r.frfs) : json(nullptr)},
                      {"select_hz", r.fit_options.select_frequencies_hz},

@@ -8,6 +8,7 @@
 #include "ema/core/error.hpp"
 #include "ema/formats/io.hpp"
 #include "ema/formats/model_file.hpp"
+#include "ema/formats/plan_file.hpp"
 
 namespace ema::pipeline {
 
@@ -169,6 +170,7 @@ std::string StepName(StepKind kind) {
     case StepKind::kDiagnose: return "diagnose";
     case StepKind::kModelAfter: return "model (updated)";
     case StepKind::kCorrelateAfter: return "correlate (updated)";
+    case StepKind::kSimulate: return "simulate";
   }
   return "?";
 }
@@ -178,6 +180,10 @@ RunPlan PlanFromProject(formats::Project project, std::filesystem::path output_d
   plan.project = std::move(project);
   plan.output_dir = std::move(output_dir);
   return plan;
+}
+
+std::filesystem::path RunResult::TimePath(std::size_t test) const {
+  return plan.output_dir / plan.project.tests[test].name / "time.unv";
 }
 
 std::filesystem::path RunResult::FrfPath(std::size_t test) const {
@@ -201,7 +207,9 @@ RunResult Run(const RunPlan& plan, const ProgressCallback& progress) {
   const formats::Project& project = result.plan.project;
   const std::size_t test_count = project.tests.size();
   result.tests.resize(test_count);
-  StepRunner runner(&result, progress, 6 * static_cast<int>(test_count) + 2);
+  const int planned = static_cast<int>(std::count_if(project.tests.begin(), project.tests.end(),
+                                                      [](const formats::ProjectTest& t) { return t.plan.has_value(); }));
+  StepRunner runner(&result, progress, 6 * static_cast<int>(test_count) + planned + 2);
   try {
     result.nominal = formats::ReadModelFile(project.model);
   } catch (const std::exception& e) {
@@ -225,6 +233,26 @@ RunResult Run(const RunPlan& plan, const ProgressCallback& progress) {
     bool have_frf = true;
     if (test.frf) {
       runner.Given(StepKind::kFrf, ti);
+    } else if (test.plan) {
+      // A rehearsal: the planned test simulated on the truth (the project's model unless the test
+      // names a variant), then estimated as measured records would be.
+      const bool simulated = runner.Run(StepKind::kSimulate, ti, [&] {
+        const model::Model truth = test.truth ? formats::ReadModelFile(*test.truth) : nominal();
+        formats::Plan test_plan = formats::ReadPlanFile(test.plan->string());
+        if (!test.setup.empty()) test_plan.setup = test.setup;
+        r.simulated = SimulateTest(truth, test_plan, (test.truth ? *test.truth : project.model).string(),
+                                   test.plan->string(), progress);
+      });
+      if (simulated) {
+        have_frf = runner.Run(StepKind::kFrf, ti, [&] {
+          std::vector<acquisition::RecordSet> sets = {{result.TimePath(t).string(), r.simulated->records}};
+          r.frf = EstimateFrfs(std::move(sets), project.frf, project.binary, progress);
+          r.frfs = r.frf->stored;
+        });
+      } else {
+        have_frf = false;
+        runner.Skip(StepKind::kFrf, ti, "no simulated test");
+      }
     } else {
       have_frf = runner.Run(StepKind::kFrf, ti, [&] {
         std::vector<std::string> files;

@@ -30,8 +30,13 @@ FrfStage EstimateFrfs(const std::vector<std::string>& time_files, const frf::Frf
       if (s.name == path) throw UsageError("file given twice: " + path);
     sets.push_back({path, formats::ReadTimeRecords(path)});
   }
+  return EstimateFrfs(std::move(sets), options, binary, progress);
+}
+
+FrfStage EstimateFrfs(std::vector<acquisition::RecordSet> sets, const frf::FrfOptions& options, bool binary,
+                      const ProgressCallback& progress) {
   FrfStage stage;
-  stage.file_count = static_cast<int>(time_files.size());
+  stage.file_count = static_cast<int>(sets.size());
   const acquisition::HammerMeasurement test = acquisition::AssembleHammerMeasurement(std::move(sets));
   stage.result = frf::EstimateFrfs(test, options, progress);
   formats::WriteOptions stored_as;

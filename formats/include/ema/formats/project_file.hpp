@@ -21,6 +21,12 @@ struct ProjectTest {
   std::string name;                            ///< folder name in OUT/ (defaults to the setup)
   std::vector<std::filesystem::path> time;     ///< time data files (roving sets), absolute
   std::optional<std::filesystem::path> frf;    ///< FRF file instead of time data (skips `ema frf`)
+  /// plan = "PLAN.toml": a rehearsal — the test is simulated from this plan (docs/plan-format.md,
+  /// as `ema simulate` does) instead of read from time data, then run as any other test.
+  std::optional<std::filesystem::path> plan;
+  /// truth = "MODEL.toml": the model variant the planned test is simulated on (with plan only;
+  /// default: the project's model).
+  std::optional<std::filesystem::path> truth;
   /// Mass of the transducer at each measured node, kg (one triaxial accelerometer counts once):
   /// the test's own sensors, which the model's prediction of this test carries (cli.md, added
   /// turn 3). 0: none declared.

@@ -31,7 +31,9 @@ nlohmann::json DiagnosisJson(const DiagnoseStage& stage);
 /// "value", "sigma"}] (SI units), "springs": [{"setup", "per_spring_n_per_m", "element_n_per_m"}]}].
 nlohmann::json FindingsJson(const Findings& findings);
 
-/// A run as JSON (Python's `ema.run`): {"project", "model", "tests": [{"name", "setup", "frf"
+/// A run as JSON (Python's `ema.run`): {"project", "model", "tests": [{"name", "setup", "simulated"
+/// (a planned test: {"plan", "truth", "records", "sets", "references", "impacts_per_reference",
+/// "in_time", "undamped"}, else null), "frf"
 /// (`ema frf --json`, null when the project gives FRFs), "modes" (`ema fit --json`), "select_hz",
 /// "picked_by_hand", "correlation_before", "correlation_after" (`ema correlate --json`)}],
 /// "diagnosis" (DIAG.json), "steps": [{"step", "test", "status" (done, failed, skipped, given),

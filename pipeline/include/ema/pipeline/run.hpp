@@ -23,8 +23,9 @@
 
 namespace ema::pipeline {
 
-/// A run's stages, in the order they run for each test (the diagnosis runs once, between).
-enum class StepKind { kFrf, kFit, kModelBefore, kCorrelateBefore, kDiagnose, kModelAfter, kCorrelateAfter };
+/// A run's stages, in the order they run for each test (the diagnosis runs once, between);
+/// kSimulate comes first for a test the project simulates from a plan (a rehearsal).
+enum class StepKind { kFrf, kFit, kModelBefore, kCorrelateBefore, kDiagnose, kModelAfter, kCorrelateAfter, kSimulate };
 
 enum class StepStatus {
   kDone,
@@ -72,6 +73,7 @@ RunPlan PlanFromProject(formats::Project project, std::filesystem::path output_d
 
 /// Per test: each stage's typed result, empty where it failed or was skipped.
 struct TestResult {
+  std::optional<SimulateStage> simulated;      ///< a planned test (plan = "PLAN.toml"): its records
   std::optional<FrfStage> frf;                 ///< estimated in this run (not when the project gives FRFs)
   std::optional<FrfSet> frfs;                  ///< the FRFs of the test as stored: estimated or the project's file
   curvefit::FitOptions fit_options;            ///< as the fit used them (band, order, selection)
@@ -119,6 +121,8 @@ struct RunResult {
 
   /// The updated model's file name in output_dir ("updated-model.toml").
   std::filesystem::path UpdatedModelPath() const { return plan.output_dir / "updated-model.toml"; }
+  /// A planned test's simulated time data (OUTDIR/<test>/time.unv, UFF 58b).
+  std::filesystem::path TimePath(std::size_t test) const;
   /// The FRFs a test's fit reads: the project's FRF file, else the one the run estimates
   /// (OUTDIR/<test>/frf.unv).
   std::filesystem::path FrfPath(std::size_t test) const;
@@ -128,7 +132,7 @@ struct RunResult {
   bool Succeeded() const;
 };
 
-/// Runs the plan: per test frf → fit → model → correlate, then the diagnosis over all tests, then
+/// Runs the plan: per test [simulate →] frf → fit → model → correlate, then the diagnosis over all tests, then
 /// per test model → correlate with the updated model. A failed step is recorded, the steps that
 /// need it are skipped, the others run. `progress` gets the share of steps done and the step's
 /// name. Throws RunStopped (from the pick hook) and what `progress` throws (ema::Cancelled:

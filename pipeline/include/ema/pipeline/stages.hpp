@@ -12,12 +12,34 @@
 #include "ema/core/types.hpp"
 #include "ema/correlation/amplitude.hpp"
 #include "ema/curvefit/fit.hpp"
+#include "ema/acquisition/hammer_measurement.hpp"
 #include "ema/diagnose/diagnose.hpp"
+#include "ema/formats/plan_file.hpp"
 #include "ema/frf/hammer_frf.hpp"
 #include "ema/model/model.hpp"
 #include "ema/pipeline/findings.hpp"
 
 namespace ema::pipeline {
+
+// ---- a simulated test (`ema simulate`; a project test's plan = "PLAN.toml") ----
+
+struct SimulateStage {
+  std::vector<TimeRecord> records;  ///< force and response records of every roving set and impact
+  bool in_time = false;             ///< integrated in time (the plan's integration = "time")
+  int sets = 0, references = 0, impacts_per_reference = 0;
+  int force_levels = 0;             ///< the plan's force levels (0: one peak force)
+  int modes = 0;                    ///< modal: the modes of the truth (the first set's)
+  int nonlinear_elements = 0;       ///< in time: springs whose law is non-linear in time
+  bool undamped = false;            ///< a mode of the truth has no damping: the records will not decay
+};
+
+/// The roving hammer test `plan` on `model` (docs/plan-format.md; the plan's setup is used: set it
+/// before to override it): per roving set the model with that set's sensor masses is solved and its
+/// modes — or, with integration = "time", its non-linear springs integrated in time — give the
+/// records. `model_path`, `plan_path` name the files in messages. InputError naming the plan for a
+/// point the model does not have.
+SimulateStage SimulateTest(const model::Model& model, const formats::Plan& plan, const std::string& model_path,
+                           const std::string& plan_path, const ProgressCallback& progress = {});
 
 // ---- FRFs (`ema frf`) ----
 
@@ -31,6 +53,9 @@ struct FrfStage {
 /// test and estimates every FRF. `binary`: the view of the file is 58b. UsageError for a file
 /// given twice; InputError for bad data.
 FrfStage EstimateFrfs(const std::vector<std::string>& time_files, const frf::FrfOptions& options, bool binary,
+                      const ProgressCallback& progress = {});
+/// The same from records in memory (a simulated test): one RecordSet per roving set or file.
+FrfStage EstimateFrfs(std::vector<acquisition::RecordSet> sets, const frf::FrfOptions& options, bool binary,
                       const ProgressCallback& progress = {});
 
 // ---- modes (`ema fit`) ----
