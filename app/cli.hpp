@@ -79,4 +79,5 @@ int RunQuality(const std::vector<std::string>& args);
 int RunAmplitude(const std::vector<std::string>& args);
 int RunPick(const std::vector<std::string>& args);
 int RunPlan(const std::vector<std::string>& args);
+int RunFeImport(const std::vector<std::string>& args);
 }  // namespace ema

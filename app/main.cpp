@@ -21,6 +21,7 @@ const Command kCommands[] = {
     {"quality", ema::RunQuality, "data-quality checks: reciprocity, driving points, coherence, scatter, MPC/MPD/MCF"},
     {"fit", ema::RunFit, "FRFs -> poles (PolyMAX), stabilisation diagram, mode shapes (LSFD)"},
     {"pick", ema::RunPick, "pick poles by hand on the stabilisation diagram in the browser (ema fit --select)"},
+    {"fe-import", ema::RunFeImport, "FE parts from the FE code's matrix files (CalculiX, Abaqus) -> [fe] model, sparse"},
     {"model", ema::RunModel, "a spatial model's own modes (and --explain its operating point)"},
     {"correlate", ema::RunCorrelate, "test modes against model modes: MAC, pairing, validation table"},
     {"diagnose", ema::RunDiagnose, "rank the physical effects the model is missing"},

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Builds the bolted-frame sample: FE part matrices of a bolted steel frame from CalculiX (ccx).
 
-    python3 samples/bolted-frame/make_sample.py --out DIR [--ccx PATH] [--loose J3] [--factor 0.3]
+    python3 samples/bolted-frame/make_sample.py --out DIR [--ccx PATH] [--ema PATH] [--loose J3] [--factor 0.3]
 
 The structure (SI units: m, kg, Pa) is a portal frame clamped at its base, meshed with 20-node
 bricks (C3D20), one element across each member:
@@ -17,15 +17,16 @@ modulus of the clamped interface). Members and joints share nodes only through t
 ccx is run with *FREQUENCY, SOLVER=MATRIXSTORAGE on the nominal deck and once per joint with that
 joint's modulus halved; K is linear in each set's modulus, so the joint's own stiffness is
 K_Jk = (K_nominal - K_k) / (1 - 0.5) and the members' stiffness is K_rest = K_nominal - sum K_Jk.
-The mass matrix is the nominal one. Everything is checked with numpy before the files are written:
-every part matrix is symmetric, lies on its own elements' DOFs only, and is positive semi-definite;
-the eigenvalues of (K_rest + sum K_Jk, M) equal ccx's own eigenvalues of the nominal deck, and
-those of (K_rest + sum K_Jk with the loosened joint scaled, M) equal ccx's eigenvalues of a deck
-whose joint modulus is scaled (1e-6 relative).
+`ema fe-import` makes them, sparse, from ccx's files, and checks them (the same DOF map in every
+run, symmetry, each part positive semi-definite and on its own elements' DOFs, the parts not
+overlapping); the mass matrix is the nominal one. The script then checks them against ccx's own
+eigenvalues: the eigenvalues of (K_rest + sum K_Jk, M) equal ccx's own
+eigenvalues of the nominal deck, and those of (K_rest + sum K_Jk with the loosened joint scaled, M)
+equal ccx's eigenvalues of a deck whose joint modulus is scaled (1e-6 relative).
 
-Writes into DIR only: M.mtx, K_rest.mtx, K_J1.mtx..K_J5.mtx, dofs.csv, nodes.csv, model.toml,
+Writes into DIR only: M.mtx, K_rest.mtx, K_J1.mtx..K_J5.mtx, dofs.csv, fe.toml (by ema fe-import), nodes.csv, model.toml,
 truth-model.toml, plan.toml, project.toml and ccx/ (the ccx input decks and their .dat output).
-Needs Python 3 and numpy; ccx from the Debian package calculix-ccx.
+Needs Python 3 and numpy, ccx from the Debian package calculix-ccx, and ema (on PATH or --ema).
 """
 import argparse
 import math
@@ -97,13 +98,6 @@ BOXES = [
 ]
 MEMBERS = ["COLUMNS", "BEAM", "BRACKET"]
 JOINTS = ["J1", "J2", "J3", "J4", "J5"]
-JOINT_TEXT = {
-    "J1": "base joint of the left column",
-    "J2": "base joint of the right column",
-    "J3": "lap joint beam / left column",
-    "J4": "lap joint beam / right column",
-    "J5": "lap joint bracket / beam overhang",
-}
 
 # C3D20 node order (Abaqus/ccx): corners 1-8, mid-edges 9-20, as offsets on the half-grid.
 C3D20 = [(0, 0, 0), (2, 0, 0), (2, 2, 0), (0, 2, 0), (0, 0, 2), (2, 0, 2), (2, 2, 2), (0, 2, 2),
@@ -230,33 +224,27 @@ def fail(msg):
     sys.exit(1)
 
 
-def read_dof(path):
-    """ccx .dof: one line per matrix row/column, 'node.direction' (direction 1..3 = x, y, z)."""
-    dofs = []
+def read_dofs_csv(path):
+    """dofs.csv as ema fe-import writes it: a header, then 'node,dof' per matrix row."""
     with open(path) as f:
-        for line in f:
-            s = line.strip()
-            if not s:
-                continue
-            node, _, d = s.partition(".")
-            dofs.append((int(node), int(d)))
-    return dofs
+        rows = [line.strip().split(",") for line in f.readlines()[1:] if line.strip()]
+    return [(int(a), int(b)) for a, b in rows]
 
 
-def read_sym(path, n):
-    """ccx .sti / .mas: 'row column value', 1-based, upper triangle (row <= column), written column
-    by column, every entry of the sparsity pattern (numerical zeros included), %.13e."""
+def read_mtx(path):
+    """A Matrix Market 'coordinate real symmetric' file as 0-based (rows, cols, values) of its lower triangle."""
     with open(path) as f:
-        data = np.array(f.read().split(), dtype=float).reshape(-1, 3)
-    i = data[:, 0].astype(int) - 1
-    j = data[:, 1].astype(int) - 1
-    if np.any(i > j):
-        fail("%s: expected the upper triangle only (row <= column)" % path)
-    if i.min() < 0 or j.max() >= n:
-        fail("%s: index out of range for %d DOFs" % (path, n))
+        lines = [line for line in f if not line.startswith("%")]
+    data = np.array(" ".join(lines[1:]).split(), dtype=float).reshape(-1, 3)
+    return data[:, 0].astype(int) - 1, data[:, 1].astype(int) - 1, data[:, 2]
+
+
+def dense(triplets, n):
+    """The symmetric matrix of a lower triangle's triplets (for the sample's own eigen-checks: n ~ 1500)."""
+    i, j, v = triplets
     a = np.zeros((n, n))
-    a[i, j] = data[:, 2]
-    a[j, i] = data[:, 2]
+    a[i, j] = v
+    a[j, i] = v
     return a
 
 
@@ -277,29 +265,6 @@ def read_eigenvalues(path):
     if not vals:
         fail("%s: no eigenvalue table" % path)
     return np.array(vals)
-
-
-def dof_mask(mesh, index, elsets):
-    """True where two DOFs share an element of the given sets (the part's sparsity pattern)."""
-    n = len(index)
-    m = np.zeros((n, n), dtype=bool)
-    for _, s, nodes in mesh.elements:
-        if s in elsets:
-            idx = [index[(nd, d)] for nd in nodes for d in (1, 2, 3) if (nd, d) in index]
-            m[np.ix_(idx, idx)] = True
-    return m
-
-
-def write_mtx(path, a, comment):
-    il, jl = np.tril_indices(a.shape[0])
-    v = a[il, jl]
-    keep = v != 0.0
-    il, jl, v = il[keep] + 1, jl[keep] + 1, v[keep]
-    with open(path, "w") as f:
-        f.write("%%MatrixMarket matrix coordinate real symmetric\n")
-        f.write("%% %s\n" % comment)
-        f.write("%d %d %d\n" % (a.shape[0], a.shape[0], len(v)))
-        f.write("".join("%d %d %.17g\n" % t for t in zip(il.tolist(), jl.tolist(), v.tolist())))
 
 
 class Eigen:
@@ -388,6 +353,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", required=True, help="folder to write the sample into (created)")
     ap.add_argument("--ccx", default=None, help="the CalculiX solver (default: ccx on PATH)")
+    ap.add_argument("--ema", default=None, help="the ema executable, for `ema fe-import` (default: ema on PATH)")
     ap.add_argument("--loose", default="J3", choices=JOINTS, help="joint loosened in the truth model")
     ap.add_argument("--factor", type=float, default=0.3, help="its stiffness factor in the truth model")
     ap.add_argument("--keep-ccx-files", action="store_true",
@@ -401,6 +367,11 @@ def main():
         fail("CalculiX ccx not found%s; install it (Debian: apt-get install calculix-ccx) or pass --ccx PATH"
              % (" at '%s'" % args.ccx if args.ccx else " on PATH"))
     exe = os.path.abspath(shutil.which(exe) or exe)  # absolute: ccx runs in OUT/ccx
+    ema = shutil.which(args.ema or "ema")
+    if not ema:
+        fail("ema not found%s; build it (cmake --build build --target ema) and put it on PATH or pass --ema PATH"
+             % (" at '%s'" % args.ema if args.ema else " on PATH"))
+    ema = os.path.abspath(ema)
     out = os.path.abspath(args.out)
     here = os.path.dirname(os.path.abspath(__file__))
     if os.path.commonpath([out, here]) == here:
@@ -415,56 +386,38 @@ def main():
 
     # 1. Matrices: nominal deck, then one deck per joint with its modulus scaled.
     jobs = [("nominal", nominal)] + [("split_" + j, dict(nominal, **{j: SPLIT_SCALE * E_JOINT})) for j in JOINTS]
-    ext = (".sti", ".mas", ".dof")
-    dofs, K, M = None, {}, None
     for job, moduli in jobs:
         write_deck(os.path.join(work, job + ".inp"), mesh, moduli, eigen=False)
-        ccx.run(job, ext)
-        d = read_dof(os.path.join(work, job + ".dof"))
-        if dofs is None:
-            dofs = d
-        elif d != dofs:
-            fail("ccx numbered the DOFs of %s differently from the nominal deck" % job)
-        n = len(dofs)
-        K[job] = read_sym(os.path.join(work, job + ".sti"), n)
-        if job == "nominal":
-            M = read_sym(os.path.join(work, job + ".mas"), n)
+        ccx.run(job, (".sti", ".mas", ".dof"))
+
+    # 2. Parts by difference, sparse, by ema: K_Jk = (K_nominal - K_k) / (1 - 0.5), K_rest =
+    # K_nominal - sum K_Jk, and the checks (the same DOF map in every run, symmetry, each part
+    # positive semi-definite, the parts not overlapping, each K_Jk on its own element's DOFs and
+    # K_rest on the members' -- the deck's *ELSETs). It writes M.mtx, K_rest.mtx,
+    # K_J1.mtx..K_J5.mtx, dofs.csv and fe.toml ([fe] + [[fe.part]]) into OUT.
+    import_cmd = [ema, "fe-import", "--nominal", os.path.join(work, "nominal")]
+    for j in JOINTS:
+        import_cmd += ["--part", "%s=%s:%r" % (j, os.path.join(work, "split_" + j), SPLIT_SCALE)]
+    import_cmd += ["--deck", os.path.join(work, "nominal.inp"), "-o", os.path.join(out, "fe.toml"),
+                   "--group", "joints", "--uncertainty", repr(UNCERTAINTY), "--nodes", "nodes.csv"]
+    r = subprocess.run(import_cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        fail("ema fe-import failed (exit %d):\n%s" % (r.returncode, (r.stdout + r.stderr).strip()))
+    for line in r.stdout.strip().splitlines():
+        print("ema fe-import: " + line)
+    dofs = read_dofs_csv(os.path.join(out, "dofs.csv"))
     n = len(dofs)
     index = {dof: r for r, dof in enumerate(dofs)}
-    if len(index) != n or any(d not in (1, 2, 3) for _, d in dofs):
-        fail("unexpected ccx DOF map (duplicates or directions other than 1..3)")
+    if any(d not in (1, 2, 3) for _, d in dofs):
+        fail("unexpected ccx DOF map (directions other than 1..3)")
     if any(nd in mesh.base for nd, _ in dofs) or len(dofs) != 3 * (len(mesh.coords) - len(mesh.base)):
         fail("ccx DOF map: expected every node but the clamped base, three directions each")
-
-    # 2. Parts by difference, each kept on its own elements' DOF pairs.
-    kmax = np.abs(K["nominal"]).max()
-    parts, report = {}, []
-    for j in JOINTS:
-        kj = (K["nominal"] - K["split_" + j]) / (1.0 - SPLIT_SCALE)
-        mask = dof_mask(mesh, index, {j})
-        off = np.abs(kj[~mask]).max() if (~mask).any() else 0.0
-        if off > 1e-12 * kmax:
-            fail("K_%s has entries off its own elements' DOFs (%.3g of max |K|)" % (j, off / kmax))
-        kj[~mask] = 0.0
-        parts[j] = kj
-        report.append((j, int(mask.any(axis=0).sum()), off / kmax))
-    k_rest = K["nominal"] - sum(parts.values())
-    mmask = dof_mask(mesh, index, set(MEMBERS))
-    resid = np.abs(k_rest[~mmask]).max()
-    if resid > 1e-11 * kmax:
-        fail("K_rest keeps stiffness off the members' DOFs (%.3g of max |K|)" % (resid / kmax))
-    k_rest[~mmask] = 0.0
-    print("check: each K_Jk lies on its own element's %d DOFs (largest entry elsewhere: %.1e of max |K|); "
-          "K_rest on the members' DOFs (elsewhere %.1e)" % (report[0][1], max(r[2] for r in report), resid / kmax))
-    for name, a in [("M", M), ("K_rest", k_rest)] + [("K_" + j, parts[j]) for j in JOINTS]:
-        if not np.array_equal(a, a.T):
-            fail("%s is not symmetric" % name)
-    for j in JOINTS:
-        sub = parts[j][np.ix_(*(2 * [np.flatnonzero(np.abs(parts[j]).sum(axis=0))]))]
-        w = np.linalg.eigvalsh(sub)
-        if w.min() < -1e-9 * w.max():
-            fail("K_%s is not positive semi-definite (min eigenvalue %.3g of %.3g)" % (j, w.min(), w.max()))
-    print("check: M, K_rest and every K_Jk symmetric; every K_Jk positive semi-definite")
+    M = read_mtx(os.path.join(out, "M.mtx"))
+    k_rest = read_mtx(os.path.join(out, "K_rest.mtx"))
+    parts = {j: read_mtx(os.path.join(out, "K_%s.mtx" % j)) for j in JOINTS}
+    joint_dofs = len(set(parts[JOINTS[0]][0]) | set(parts[JOINTS[0]][1]))
+    M, k_rest = dense(M, n), dense(k_rest, n)
+    parts = {j: dense(parts[j], n) for j in JOINTS}
 
     # 3. Eigenvalues against ccx's own: nominal deck and the deck with the loosened joint.
     truth_moduli = dict(nominal, **{args.loose: args.factor * E_JOINT})
@@ -522,18 +475,9 @@ def main():
     samples = int(2 ** math.ceil(math.log2(t_decay * fs)))
 
     # 5. Files.
-    write_mtx(os.path.join(out, "M.mtx"), M, "bolted frame: mass (kg), ccx %s consistent mass, nominal deck" % version)
-    write_mtx(os.path.join(out, "K_rest.mtx"), k_rest,
-              "bolted frame: members' stiffness (N/m) = K_nominal - sum K_Jk, ccx %s" % version)
-    for j in JOINTS:
-        write_mtx(os.path.join(out, "K_%s.mtx" % j), parts[j],
-                  "bolted frame: joint %s (%s) stiffness (N/m) = (K_nominal - K[E_%s x %g]) / %g, ccx %s"
-                  % (j, JOINT_TEXT[j], j, SPLIT_SCALE, 1 - SPLIT_SCALE, version))
-    with open(os.path.join(out, "dofs.csv"), "w") as f:
-        f.write("node,dof\n" + "".join("%d,%d\n" % d for d in dofs))
     with open(os.path.join(out, "nodes.csv"), "w") as f:
         f.write("node,x,y,z\n" + "".join("%d,%r,%r,%r\n" % ((nd,) + mesh.coords[nd]) for nd in sorted(mesh.coords)))
-    model = model_toml(version, n, points, mesh)
+    model = model_toml(version, n, points, mesh, os.path.join(out, "fe.toml"))
     with open(os.path.join(out, "model.toml"), "w") as f:
         f.write(model)
     with open(os.path.join(out, "truth-model.toml"), "w") as f:
@@ -556,8 +500,8 @@ def main():
     print("bolted frame: %d nodes, %d C3D20 elements (%s), %d DOFs after clamping %d base nodes"
           % (len(mesh.coords), len(mesh.elements), ", ".join("%s %d" % kv for kv in counts.items()), n,
              len(mesh.base)))
-    print("parts: K_rest (members) + %d joints in group 'joints' (%s), %d DOFs each; joint modulus %.3g GPa"
-          % (len(JOINTS), ", ".join(JOINTS), report[0][1], E_JOINT / 1e9))
+    print("parts: K_rest (members) + %d joints in group 'joints' (%s), %d DOFs (J1); joint modulus %.3g GPa"
+          % (len(JOINTS), ", ".join(JOINTS), joint_dofs, E_JOINT / 1e9))
     print("ccx %s: %d runs, %.2f s" % (version, ccx.runs, ccx.seconds))
     print("%-5s %10s %10s %8s" % ("mode", "nominal", "truth", "change"))
     for i in range(n_modes + 1):
@@ -565,7 +509,7 @@ def main():
                                                   "" if i < n_modes else "   (above the band)"))
     print("truth: %s x %g; band %g-%g Hz (%d modes); reference %s; %g Hz x %d samples (%.2f s)"
           % (args.loose, args.factor, band[0], band[1], n_modes, reference, fs, samples, samples / fs))
-    ritz = Ritz(M, k_rest, parts, phi_nom[:, :40], K["nominal"])
+    ritz = Ritz(M, k_rest, parts, phi_nom[:, :40], k_rest + sum(parts.values()))
     err = np.abs(ritz.hz({args.loose: args.factor}, n_modes) / f_truth[:n_modes] - 1).max()
     print("sensitivity (each joint alone x %g, %% change of modes 1-%d; reduced model, %.0e of the full one):"
           % (args.factor, n_modes, err))
@@ -581,24 +525,20 @@ def main():
     print("wrote %s (%.1f s)" % (out, time.perf_counter() - t_start))
 
 
-def model_toml(version, n, points, mesh):
+def model_toml(version, n, points, mesh, fe_toml):
+    """model.toml: the [fe] + [[fe.part]] tables ema fe-import wrote (fe_toml), the damping and the points."""
+    with open(fe_toml) as f:
+        fe = "".join(line for line in f if not line.startswith("#"))
     lines = [
         "# Bolted steel portal frame: FE matrices from CalculiX ccx %s (C3D20 bricks, SI units)," % version,
         "# made by samples/bolted-frame/make_sample.py. %d DOFs; the joints J1..J5 are parts of group" % n,
-        "# 'joints', each the difference of two ccx assemblies (see samples/bolted-frame/README.md).",
+        "# 'joints', each the difference of two ccx assemblies, imported by `ema fe-import`",
+        "# (see samples/bolted-frame/README.md). [fe].stiffness: the members (columns, beam, bracket).",
         "[model]",
         'name = "Bolted frame (nominal joints)"',
         "",
-        "[fe]",
-        'mass = "M.mtx"                # the whole consistent mass matrix (kg)',
-        'stiffness = "K_rest.mtx"      # the members (columns, beam, bracket): K_nominal - sum of the joints',
-        'dofs = "dofs.csv"',
-        'nodes = "nodes.csv"',
+        fe.strip(),
     ]
-    for j in JOINTS:
-        lines += ["", "[[fe.part]]               # " + JOINT_TEXT[j],
-                  'name = "%s"' % j, 'group = "joints"', 'stiffness = "K_%s.mtx"' % j,
-                  "uncertainty = %r" % UNCERTAINTY]
     lines += ["", "[damping]", "ratio = %r" % DAMPING, ""]
     for pid, node, label in points:
         x, y, z = mesh.coords[node]

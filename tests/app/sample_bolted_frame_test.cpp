@@ -33,7 +33,8 @@ TEST(SampleBoltedFrame, RunNamesTheLoosenedJointFromCalculixParts) {
   const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "bolted-frame";
   fs::remove_all(dir);
   const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";  // Debian's, with numpy
-  ASSERT_EQ(RunShell(python + " '" + EMA_SOURCE_DIR + "/samples/bolted-frame/make_sample.py' --out '" + dir.string() + "'",
+  ASSERT_EQ(RunShell(python + " '" + EMA_SOURCE_DIR + "/samples/bolted-frame/make_sample.py' --out '" + dir.string() +
+                         "' --ema '" + EMA_EXECUTABLE + "'",
                 dir.string() + "-make.log"),
             0)
       << Slurp(dir.string() + "-make.log");
