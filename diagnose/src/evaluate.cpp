@@ -60,7 +60,7 @@ double RobustCost(const Eigen::VectorXd& r, double a) {
 // The reduced models of an FE-sized model: one factory per setup and centre (a full solve and a
 // factorisation each), one reduced model per set of probes.
 struct Evaluator::Reduced {
-  model::Model skeleton;  // the base without its [fe] matrices: effects are applied to copies of it
+  model::Model skeleton;  // the base without its [fe] matrices, DOF map and node positions: effects are applied to copies of it
   std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModelFactory>> factories;
   std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModel>> models;
   /// Reduced models in order of last use: at most kKept stay (each holds n × b doubles; a diagnosis
@@ -96,6 +96,10 @@ Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, co
     reduced_models_->skeleton = base;
     reduced_models_->skeleton.fe.mass.resize(0, 0);
     reduced_models_->skeleton.fe.stiffness.resize(0, 0);
+    // Nor its DOF map and node positions (the reduced models keep their own): each evaluation
+    // copies the skeleton, and a 50 000-DOF map is no small copy.
+    reduced_models_->skeleton.fe.dofs.clear();
+    reduced_models_->skeleton.fe.node_positions.clear();
   }
 }
 

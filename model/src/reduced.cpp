@@ -5,9 +5,11 @@
 #include <Eigen/Dense>
 #include <Eigen/QR>
 #include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
+#include "assembly.hpp"
 #include "ema/core/error.hpp"
 #include "ema/model/effects.hpp"
 #include "sparse_factor.hpp"
@@ -33,11 +35,44 @@ Eigen::SparseMatrix<double> Embedded(const Eigen::SparseMatrix<double>& part, in
   return out;
 }
 
-// out += Vᵀ D V for a sparse D with few non-zeros (a spring, a point mass): a rank-one update per entry.
-void AddProjected(const Eigen::SparseMatrix<double>& d, const Eigen::MatrixXd& v, Eigen::MatrixXd* out) {
-  for (int c = 0; c < d.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(d, c); it; ++it)
-      if (it.value() != 0.0) out->noalias() += it.value() * v.row(it.row()).transpose() * v.row(it.col());
+// out += Vᵀ D V for a D with few entries (a spring, a point mass, sensors): a rank-one update per
+// entry, column by column.
+void AddProjected(const std::vector<Eigen::Triplet<double>>& d, const Eigen::MatrixXd& v, Eigen::MatrixXd* out) {
+  for (const auto& e : d) out->noalias() += e.value() * v.row(e.row()).transpose() * v.row(e.col());
+}
+
+// Triplets summed per entry (duplicates in their order, as setFromTriplets sums them), column by
+// column, rows ascending.
+std::vector<Eigen::Triplet<double>> Summed(std::vector<Eigen::Triplet<double>> t) {
+  std::stable_sort(t.begin(), t.end(), [](const auto& a, const auto& b) {
+    return a.col() != b.col() ? a.col() < b.col() : a.row() < b.row();
+  });
+  std::vector<Eigen::Triplet<double>> out;
+  for (const auto& e : t) {
+    if (!out.empty() && out.back().row() == e.row() && out.back().col() == e.col())
+      out.back() = Eigen::Triplet<double>(e.row(), e.col(), out.back().value() + e.value());
+    else
+      out.push_back(e);
+  }
+  return out;
+}
+
+// a − b of two summed lists in the same order, exact zeros dropped (an unchanged spring cancels
+// exactly): the entries of the sparse difference of the two assembled matrices after prune(0).
+std::vector<Eigen::Triplet<double>> Difference(const std::vector<Eigen::Triplet<double>>& a,
+                                               const std::vector<Eigen::Triplet<double>>& b) {
+  std::vector<Eigen::Triplet<double>> out;
+  auto before = [](const auto& x, const auto& y) { return x.col() != y.col() ? x.col() < y.col() : x.row() < y.row(); };
+  auto push = [&](int row, int col, double v) {
+    if (std::abs(v) > 0.0) out.emplace_back(row, col, v);
+  };
+  size_t i = 0, j = 0;
+  while (i < a.size() || j < b.size()) {
+    if (j == b.size() || (i < a.size() && before(a[i], b[j]))) push(a[i].row(), a[i].col(), a[i].value()), ++i;
+    else if (i == a.size() || before(b[j], a[i])) push(b[j].row(), b[j].col(), -b[j].value()), ++j;
+    else push(a[i].row(), a[i].col(), a[i].value() - b[j].value()), ++i, ++j;
+  }
+  return out;
 }
 
 // Vᵀ A V for a part matrix A (FE-sized, its entries on `rows` of the system only): the part's
@@ -84,6 +119,13 @@ ReducedModelFactory::ReducedModelFactory(const Model& input, const SolveOptions&
   if (!factorisation_->ldlt.Compute(shifted))
     throw InputError(origin, "factorisation of K - sigma M failed (the reduced model of the diagnosis needs it)");
   mass_modes_ = system_.mass * solution_.full_shapes;
+  rest_assembler_ = std::make_unique<detail::RestAssembler>(base);
+  {
+    std::vector<Eigen::Triplet<double>> mt, kt;
+    rest_assembler_->Assemble(base, options_, &mt, &kt);
+    rest_mass_ = Summed(std::move(mt));
+    rest_stiffness_ = Summed(std::move(kt));
+  }
   part_rows_.resize(base.fe.parts.size());
   skeleton_ = base;
   skeleton_.effects.clear();
@@ -95,25 +137,31 @@ ReducedModelFactory::~ReducedModelFactory() = default;
 
 int ReducedModelFactory::DofCount() const { return static_cast<int>(system_.mass.rows()); }
 
-ReducedModelFactory::Delta ReducedModelFactory::DeltaOf(const Model& changed, const SolveOptions& options,
-                                                        bool parts) const {
+ReducedModelFactory::Delta ReducedModelFactory::DeltaOf(const Model& changed, const SolveOptions& options) const {
   const System light = Assemble(changed, options, FeAssembly::kNone);
   Delta d{Eigen::SparseMatrix<double>(light.stiffness - rest_.stiffness),
           Eigen::SparseMatrix<double>(light.mass - rest_.mass)};
-  if (parts) {
-    const int n = DofCount(), offset = system_.body_dof_count;
-    for (std::size_t p = 0; p < changed.fe.parts.size() && p < skeleton_.fe.parts.size(); ++p) {
-      const FePart& now = changed.fe.parts[p];
-      const FePart& was = skeleton_.fe.parts[p];
-      if (now.stiffness && now.stiffness_factor != was.stiffness_factor)
-        d.stiffness += (now.stiffness_factor - was.stiffness_factor) * Embedded(*now.stiffness, offset, n);
-      if (now.mass && now.mass_factor != was.mass_factor)
-        d.mass += (now.mass_factor - was.mass_factor) * Embedded(*now.mass, offset, n);
-    }
+  const int n = DofCount(), offset = system_.body_dof_count;
+  for (std::size_t p = 0; p < changed.fe.parts.size() && p < skeleton_.fe.parts.size(); ++p) {
+    const FePart& now = changed.fe.parts[p];
+    const FePart& was = skeleton_.fe.parts[p];
+    if (now.stiffness && now.stiffness_factor != was.stiffness_factor)
+      d.stiffness += (now.stiffness_factor - was.stiffness_factor) * Embedded(*now.stiffness, offset, n);
+    if (now.mass && now.mass_factor != was.mass_factor)
+      d.mass += (now.mass_factor - was.mass_factor) * Embedded(*now.mass, offset, n);
   }
   d.stiffness.prune(0.0);
   d.mass.prune(0.0);
   return d;
+}
+
+ReducedModelFactory::RestDelta ReducedModelFactory::RestDeltaOf(const Model& changed, const SolveOptions& options) const {
+  if (!rest_assembler_->Fits(changed))
+    throw InputError(changed.origin.empty() ? "model" : changed.origin,
+                     "the changed model's bodies are not those of its reduced model's base");
+  std::vector<Eigen::Triplet<double>> mt, kt;
+  rest_assembler_->Assemble(changed, options, &mt, &kt);
+  return {Difference(Summed(std::move(kt)), rest_stiffness_), Difference(Summed(std::move(mt)), rest_mass_)};
 }
 
 const Eigen::MatrixXd& ReducedModelFactory::Responses(const std::vector<Effect>& probe) const {
@@ -123,7 +171,7 @@ const Eigen::MatrixXd& ReducedModelFactory::Responses(const std::vector<Effect>&
   if (it != responses_.end()) return it->second;
   Model changed = skeleton_;
   for (const Effect& e : probe) changed = ApplyEffect(changed, e);
-  const Delta d = DeltaOf(changed, options_, true);
+  const Delta d = DeltaOf(changed, options_);
   const auto q = std::min<Eigen::Index>(reduced_options_.enriched_modes, lambda_.size());
   // A change confined to a few DOFs (a support, a bolted joint, a point mass): the static responses
   // to unit loads on those DOFs span every mode's change, whatever its size (the attachment modes
@@ -264,10 +312,10 @@ Solution ReducedModel::Solve(const Model& changed, const SolveOptions& options, 
   // What is not an FE matrix (springs, bodies, point masses — sensors included): its difference
   // to the base, projected entry by entry.
   if (rest_changed || !options.extra_masses.empty()) {
-    const ReducedModelFactory::Delta rest = f.DeltaOf(changed, options, false);
+    const ReducedModelFactory::RestDelta rest = f.RestDeltaOf(changed, options);
     AddProjected(rest.stiffness, basis_, &k);
     AddProjected(rest.mass, basis_, &m);
-    mass_changed = rest.mass.nonZeros() > 0;
+    mass_changed = !rest.mass.empty();
   }
   ProjectParts(changed);
   for (std::size_t p = 0; p < changed.fe.parts.size() && p < f.skeleton_.fe.parts.size(); ++p) {

@@ -1,5 +1,6 @@
 // Assembly of M and K at the operating point and the generalised eigenproblem K phi = w^2 M phi.
 #include "ema/model/solve.hpp"
+#include "assembly.hpp"
 #include "sparse_factor.hpp"
 
 #include <Eigen/Dense>
@@ -18,7 +19,8 @@
 #include "ema/model/effects.hpp"
 
 namespace ema::model {
-namespace {
+// The DOF index is named (not in the anonymous namespace) because detail::RestAssembler keeps one.
+namespace assembly {
 
 using Coeffs = std::vector<std::pair<int, double>>;
 using Triplets = std::vector<Eigen::Triplet<double>>;
@@ -42,6 +44,14 @@ struct DofIndex {
   int body_dofs = 0;
   int n = 0;
 };
+
+}  // namespace assembly
+
+namespace {
+
+using assembly::Coeffs;
+using assembly::DofIndex;
+using assembly::Triplets;
 
 /// Displacement / rotation of an anchor as linear combinations of system DOFs.
 struct Kinematics {
@@ -114,11 +124,13 @@ std::string BodyList(const Model& model) {
   return s + (s.empty() ? "" : ", ") + kGround;
 }
 
-Kinematics Resolve(const Model& model, const DofIndex& index, const Anchor& anchor, const Eigen::Vector3d* default_at,
-                   const std::string& where, const std::string& what) {
+// `fe`: the model's [fe] DOF map and node positions (the model's own, or those of the model a
+// RestAssembler was made for: effects never change them).
+Kinematics Resolve(const Model& model, const FeMatrices& fe, const DofIndex& index, const Anchor& anchor,
+                   const Eigen::Vector3d* default_at, const std::string& where, const std::string& what) {
   Kinematics k;
   if (anchor.IsNode()) {
-    if (model.fe.Empty())
+    if (fe.Empty())
       throw InputError(where, what + " refers to FE node " + std::to_string(anchor.node) + " but the model has no [fe]");
     bool any = false;
     for (int i = 0; i < 3; ++i) {
@@ -130,8 +142,8 @@ Kinematics Resolve(const Model& model, const DofIndex& index, const Anchor& anch
       if (k.has_theta[i]) k.theta[i].push_back({theta, 1.0}), any = true;
     }
     if (!any) throw InputError(where, what + " refers to FE node " + std::to_string(anchor.node) + ", which has no DOF in the [fe] DOF map");
-    auto pos = model.fe.node_positions.find(anchor.node);
-    if (pos != model.fe.node_positions.end()) k.position = pos->second;
+    auto pos = fe.node_positions.find(anchor.node);
+    if (pos != fe.node_positions.end()) k.position = pos->second;
     return k;
   }
   if (anchor.IsGround()) {
@@ -159,11 +171,11 @@ void AddOuter(double scale, const Coeffs& g, Triplets* t) {
     for (const auto& [q, cq] : g) t->emplace_back(p, q, scale * cp * cq);
 }
 
-void AddPointMass(const Model& model, const DofIndex& index, const PointMass& pm, Triplets* t) {
+void AddPointMass(const Model& model, const FeMatrices& fe, const DofIndex& index, const PointMass& pm, Triplets* t) {
   const std::string where = model.Where(pm.line);
   if (!(pm.mass >= 0.0) || !std::isfinite(pm.mass))
     throw InputError(where, "mass '" + pm.name + "': mass must be >= 0, got " + std::to_string(pm.mass));
-  const Kinematics k = Resolve(model, index, pm.where, nullptr, where, "mass '" + pm.name + "'");
+  const Kinematics k = Resolve(model, fe, index, pm.where, nullptr, where, "mass '" + pm.name + "'");
   if (k.ground) return;  // a mass on the fixed support does not move
   for (int i = 0; i < 3; ++i) AddOuter(pm.mass, k.u[i], t);
 }
@@ -178,10 +190,11 @@ const Setup* FindSetup(const Model& model, const std::string& name) {
                    "unknown setup '" + name + "' (setups: " + (known.empty() ? "none" : known) + ")");
 }
 
-}  // namespace
-
-System Assemble(const Model& model, const SolveOptions& options, FeAssembly fe_matrices) {
-  const DofIndex index = BuildIndex(model);
+// What is not an FE matrix — bodies, point masses (the options' extra masses too) and springs at
+// the operating point of `options.setup` — as triplets of M and K in the numbering of `index`;
+// `sys` (may be null) gets the bodies' DOF names and the springs' states and coefficients.
+void AddRest(const Model& model, const FeMatrices& fe, const DofIndex& index, const SolveOptions& options, Triplets* mt,
+             Triplets* kt, System* sys) {
   const Setup* setup = FindSetup(model, options.setup);
   if (setup) {
     std::set<std::string> groups;
@@ -194,28 +207,28 @@ System Assemble(const Model& model, const SolveOptions& options, FeAssembly fe_m
                                                        group + "' (groups: " + known + ")");
       }
   }
-  System sys;
-  sys.body_dof_count = index.body_dofs;
-  const int n = index.n;
-  Triplets mt, kt;
   for (const Body& b : model.bodies) {
-    const int o = index.body_offset.at(b.name);
+    const auto at = index.body_offset.find(b.name);
+    if (at == index.body_offset.end())
+      throw InputError(model.Where(b.line), "body '" + b.name + "' is not a body of the assembled layout");
+    const int o = at->second;
     const std::string where = model.Where(b.line);
     if (!(b.mass >= 0.0) || !(b.inertia.minCoeff() >= 0.0))
       throw InputError(where, "body '" + b.name + "': mass and inertia must be >= 0");
-    for (int i = 0; i < 3; ++i) mt.emplace_back(o + i, o + i, b.mass);
+    for (int i = 0; i < 3; ++i) mt->emplace_back(o + i, o + i, b.mass);
     Eigen::Matrix3d j;
     j << b.inertia.x(), -b.products.x(), -b.products.z(),  //
         -b.products.x(), b.inertia.y(), -b.products.y(),   //
         -b.products.z(), -b.products.y(), b.inertia.z();
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c)
-        if (j(r, c) != 0.0) mt.emplace_back(o + 3 + r, o + 3 + c, j(r, c));
+        if (j(r, c) != 0.0) mt->emplace_back(o + 3 + r, o + 3 + c, j(r, c));
     static const char* kDofNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
-    for (int i = 0; i < 6; ++i) sys.dof_names.push_back(b.name + ":" + kDofNames[i]);
+    if (sys)
+      for (int i = 0; i < 6; ++i) sys->dof_names.push_back(b.name + ":" + kDofNames[i]);
   }
-  for (const PointMass& pm : model.masses) AddPointMass(model, index, pm, &mt);
-  for (const PointMass& pm : options.extra_masses) AddPointMass(model, index, pm, &mt);
+  for (const PointMass& pm : model.masses) AddPointMass(model, fe, index, pm, mt);
+  for (const PointMass& pm : options.extra_masses) AddPointMass(model, fe, index, pm, mt);
 
   for (const Spring& s : model.springs) {
     const std::string where = model.Where(s.line);
@@ -223,8 +236,8 @@ System Assemble(const Model& model, const SolveOptions& options, FeAssembly fe_m
     const double norm = s.direction.norm();
     if (!(norm > 0.0) || !std::isfinite(norm)) throw InputError(where, what + ": direction must be a non-zero vector");
     const Eigen::Vector3d n_dir = s.direction / norm;
-    const Kinematics a = Resolve(model, index, s.a, nullptr, where, what + " end a");
-    const Kinematics b = Resolve(model, index, s.b, &a.position, where, what + " end b");
+    const Kinematics a = Resolve(model, fe, index, s.a, nullptr, where, what + " end a");
+    const Kinematics b = Resolve(model, fe, index, s.b, &a.position, where, what + " end b");
     if (a.ground && b.ground) throw InputError(where, what + ": both ends on ground");
     double override_value = kNaN;
     if (setup) {
@@ -248,10 +261,23 @@ System Assemble(const Model& model, const SolveOptions& options, FeAssembly fe_m
         for (const auto& [dof, c] : (rot ? end->theta[i] : end->u[i])) g.emplace_back(dof, sign * n_dir[i] * c);
       }
     }
-    AddOuter(state.stiffness, g, &kt);
-    sys.springs.push_back(std::move(state));
-    sys.spring_coefficients.push_back(std::move(g));
+    AddOuter(state.stiffness, g, kt);
+    if (sys) {
+      sys->springs.push_back(std::move(state));
+      sys->spring_coefficients.push_back(std::move(g));
+    }
   }
+}
+
+}  // namespace
+
+System Assemble(const Model& model, const SolveOptions& options, FeAssembly fe_matrices) {
+  const DofIndex index = BuildIndex(model);
+  System sys;
+  sys.body_dof_count = index.body_dofs;
+  const int n = index.n;
+  Triplets mt, kt;
+  AddRest(model, model.fe, index, options, &mt, &kt, &sys);
   if (!model.fe.Empty()) {
     const int o = index.body_dofs;
     auto add = [&](const Eigen::SparseMatrix<double>& src, double factor, Triplets* t) {
@@ -283,7 +309,7 @@ System Assemble(const Model& model, const SolveOptions& options, FeAssembly fe_m
   for (const TestPoint& p : model.points) {
     const std::string where = model.Where(p.line);
     if (!ids.insert(p.id).second) throw InputError(where, "test point id " + std::to_string(p.id) + " appears twice");
-    const Kinematics k = Resolve(model, index, p.where, nullptr, where, "point " + std::to_string(p.id));
+    const Kinematics k = Resolve(model, model.fe, index, p.where, nullptr, where, "point " + std::to_string(p.id));
     const int row0 = static_cast<int>(sys.observed_dofs.size());
     for (int i = 0; i < 3; ++i) {
       sys.observed_dofs.push_back({p.id, i + 1});
@@ -294,6 +320,33 @@ System Assemble(const Model& model, const SolveOptions& options, FeAssembly fe_m
   sys.observation.resize(static_cast<int>(sys.observed_dofs.size()), n);
   sys.observation.setFromTriplets(ot.begin(), ot.end());
   return sys;
+}
+
+struct detail::RestAssembler::Layout {
+  DofIndex index;
+  FeMatrices fe;  ///< the DOF map and node positions only (no matrix, no part)
+  std::vector<std::string> bodies;
+};
+
+detail::RestAssembler::RestAssembler(const Model& layout) : layout_(std::make_unique<Layout>()) {
+  layout_->index = BuildIndex(layout);
+  layout_->fe.dofs = layout.fe.dofs;
+  layout_->fe.node_positions = layout.fe.node_positions;
+  for (const Body& b : layout.bodies) layout_->bodies.push_back(b.name);
+}
+
+detail::RestAssembler::~RestAssembler() = default;
+
+bool detail::RestAssembler::Fits(const Model& model) const {
+  if (model.bodies.size() != layout_->bodies.size()) return false;
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (model.bodies[b].name != layout_->bodies[b]) return false;
+  return true;
+}
+
+void detail::RestAssembler::Assemble(const Model& model, const SolveOptions& options, Triplets* mass,
+                                     Triplets* stiffness) const {
+  AddRest(model, layout_->fe, layout_->index, options, mass, stiffness, nullptr);
 }
 
 namespace {

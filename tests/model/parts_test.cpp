@@ -149,6 +149,44 @@ TEST_F(FrameParts, ReducedModelMatchesFullSolves) {
   for (size_t i = 0; i < full.size(); ++i) EXPECT_NEAR(approx[i], full[i], 1e-4 * full[i]) << "mode " << i + 1;
 }
 
+// A reduced solve projects point masses, springs and sensors from their own entries with the base's
+// DOF layout (issue 39): the changed model it is given may leave out its [fe] DOF map and node
+// positions — the diagnosis copies a skeleton without them for every evaluation — and solves the
+// same, bit for bit, as with them, and as the full model does to the reduced model's accuracy.
+TEST_F(FrameParts, ReducedModelSolvesAChangedModelWithoutItsDofMap) {
+  const Model m = formats::ReadModelFile(files_->model);
+  SolveOptions so;
+  so.max_modes = 10;
+  ReducedModelOptions ro;
+  ro.modes = 20;
+  ro.enriched_modes = 10;
+  const ReducedModelFactory factory(m, so, ro);
+  const std::string point = "points:" + std::to_string(m.points.at(3).id);
+  const Effect mass{EffectKind::kAddedMass, point, {{"mass", 2.0}}, {}, 0};
+  const Effect girder{EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.7}}, {}, 0};
+  const auto reduced = factory.Make({{mass}, {girder}});
+  SolveOptions with_sensors = so;
+  for (const TestPoint& p : m.points) with_sensors.extra_masses.push_back({"sensor", p.where, 0.5, 0});
+  Model lean = factory.Skeleton();
+  lean.fe.dofs.clear();
+  lean.fe.node_positions.clear();
+  const std::vector<Effect> effects{{EffectKind::kAddedMass, point, {{"mass", 1.5}}, {}, 0},
+                                    {EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.8}}, {}, 0}};
+  Model with_map = factory.Skeleton();
+  for (const Effect& e : effects) lean = ApplyEffect(lean, e), with_map = ApplyEffect(with_map, e);
+  const std::vector<double> a = Frequencies(reduced->Solve(lean, with_sensors));
+  const std::vector<double> b = Frequencies(reduced->Solve(with_map, with_sensors));
+  Model full = m;
+  for (const Effect& e : effects) full = ApplyEffect(full, e);
+  const std::vector<double> exact = Frequencies(Solve(full, with_sensors));
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_EQ(a.size(), exact.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i], b[i]) << "mode " << i + 1;
+    EXPECT_NEAR(a[i], exact[i], 1e-4 * exact[i]) << "mode " << i + 1;
+  }
+}
+
 // A model written with `-o` (here: the writer of `ema diagnose -o`) names its part files so that it
 // loads from another folder and solves the same.
 TEST_F(FrameParts, WrittenModelLoadsFromAnotherFolder) {

@@ -27,6 +27,10 @@
 
 namespace ema::model {
 
+namespace detail {
+class RestAssembler;
+}
+
 struct ReducedModelOptions {
   /// Elastic modes of the full solve kept in every basis.
   int modes = 30;
@@ -76,8 +80,17 @@ class ReducedModelFactory {
   struct Delta {
     Eigen::SparseMatrix<double> stiffness, mass;
   };
-  // ΔK, ΔM of `changed` (a skeleton with effects) against the base, FE parts included when `parts`.
-  Delta DeltaOf(const Model& changed, const SolveOptions& options, bool parts) const;
+  // ΔK, ΔM of `changed` (a skeleton with effects) against the base, FE parts included: n × n, for
+  // a probe's responses (once per probe).
+  Delta DeltaOf(const Model& changed, const SolveOptions& options) const;
+  /// ΔK, ΔM of the bodies, springs and point masses of `changed` (the options' extra masses too)
+  /// against the base's — the entries of the difference of the two assembled matrices without
+  /// zeros, column by column — from triplets alone: no n × n matrix, DOF name or observation is
+  /// built per reduced solve.
+  struct RestDelta {
+    std::vector<Eigen::Triplet<double>> stiffness, mass;
+  };
+  RestDelta RestDeltaOf(const Model& changed, const SolveOptions& options) const;
   const Eigen::MatrixXd& Responses(const std::vector<Effect>& probe) const;
 
   struct Factorisation;
@@ -89,6 +102,8 @@ class ReducedModelFactory {
   Solution solution_;
   System system_;                      ///< full K, M of the base
   System rest_;                        ///< bodies, springs, point masses of the base (no FE matrices)
+  std::unique_ptr<detail::RestAssembler> rest_assembler_;           ///< the base's DOF layout, kept
+  std::vector<Eigen::Triplet<double>> rest_mass_, rest_stiffness_;  ///< rest_'s entries, column by column
   Eigen::VectorXd lambda_;             ///< eigenvalues of the kept elastic modes
   Eigen::MatrixXd mass_modes_;         ///< M Φ (for M-orthogonalising responses against Φ)
   mutable std::vector<std::vector<int>> part_rows_;  ///< per part, its non-zero rows (filled on use)
@@ -104,7 +119,9 @@ class ReducedModel {
   /// (mass-normalised, damping from [damping]) and rigid-body frequencies; no full shapes, springs
   /// or energy shares. Throws InputError for a stiffness that is not positive semi-definite.
   /// `rest_changed` false: the caller knows that only part factors changed and `options` adds no
-  /// extra mass (the bodies, springs and point masses are not assembled again).
+  /// extra mass (the bodies, springs and point masses are not assembled again). The [fe] DOF map
+  /// and node positions of `changed` are not read (the factory's stand for them: effects change
+  /// neither), so a skeleton without them will do.
   Solution Solve(const Model& changed, const SolveOptions& options, bool rest_changed = true) const;
 
   int BasisSize() const { return static_cast<int>(basis_.cols()); }
