@@ -87,9 +87,12 @@ class Gen {
     return v;
   }
 
-  /// Direction codes within ±8 (the named ones, scalar 0 and unknown codes); any node id.
-  /// (DirectionName negates the code: INT_MIN would overflow — not a code any reader makes.)
-  Dof AnyDof() { return {AnyInt(), Int(-8, 8)}; }
+  /// Direction codes mostly within ±8 (the named ones, scalar 0 and unknown codes), sometimes any
+  /// int (INT_MIN included: DirectionName once negated it); any node id.
+  Dof AnyDof() {
+    const int node = AnyInt();
+    return {node, Int(0, 15) == 0 ? AnyInt() : Int(-8, 8)};
+  }
   std::vector<Dof> Dofs(std::size_t max) {
     std::vector<Dof> out(Count(max));
     for (auto& d : out) d = AnyDof();

@@ -78,12 +78,22 @@ elseif(FUZZ_TARGET STREQUAL "plan_file")
   file(GLOB seeds "${SOURCE_DIR}/samples/guideway/truth/plan-*.toml" "${SOURCE_DIR}/tests/model/data/plan.toml"
                   "${bad}/plan_*/plan.toml")
   add_seed_files(${seeds})
+elseif(FUZZ_TARGET STREQUAL "fe_import")
+  # A three-spring chain (tests/formats/fe_import_test.cpp): nominal k = 110, 100, 50 between
+  # ground, DOF 1.1, 2.1 and 3.1; part A's run halves the 100 N/m spring; its deck and an
+  # Abaqus matrix of part A, lower triangle.
+  set(dof "1.1\n2.1\n3.1\n")
+  set(mas "1 1 1\n2 2 2\n3 3 3\n")
+  set(deck "*NODE\n1,0,0,0\n2,1,0,0\n3,2,0,0\n*ELEMENT, TYPE=SPRINGA, ELSET=A\n1, 1, 2\n*ELEMENT, TYPE=SPRINGA, ELSET=B\n2, 2, 3\n")
+  set(mtx "1, 1, 1, 1, 100\n2, 1, 1, 1, -100\n2, 1, 2, 1, 100\n")
+  add_seed(chain "1 1 110\n1 2 -100\n2 2 150\n2 3 -50\n3 3 50\n${sep}${mas}${sep}${dof}${sep}1 1 60\n1 2 -50\n2 2 100\n2 3 -50\n3 3 50\n${sep}${mas}${sep}${dof}${sep}${deck}${sep}${mtx}")
+  add_seed(lower_triangle "1 1 110\n2 1 -100\n${sep}${sep}1.1\n2.1\n")
 elseif(FUZZ_TARGET STREQUAL "json_results" OR FUZZ_TARGET STREQUAL "json_modes_roundtrip")
   # The inputs are not files but bytes FuzzedDataProvider decodes into typed results; its
   # integers come from the end of the input, so the last byte picks the writer ('A' + k: the
-  # k-th of json_results' 13 cases; the round trip's choice of 4). Texts come from the front.
+  # k-th of json_results' 17 cases; the round trip's choice of 4). Texts come from the front.
   set(body "m/s^2 Hz 101+Z modes.unv 0123456789abcdefghijklmnopqrstuvwxyz ~!@#$%^&*()_+{}|:<>?")
-  foreach(k RANGE 0 12)
+  foreach(k RANGE 0 16)
     math(EXPR code "65 + ${k}")
     string(ASCII ${code} last)
     add_seed("case_${k}" "${body}${body}${last}")

@@ -2,6 +2,7 @@
 #include "ema/formats/plan_json.hpp"
 
 #include "ema/core/error.hpp"
+#include "ema/diagnose/diagnose.hpp"
 #include "ema/formats/json_codecs.hpp"
 
 namespace ema::formats {
@@ -58,7 +59,7 @@ std::vector<planning::Reading> LookAlikeReadings(const std::vector<DiagnosisRead
   const double p1 = first->probability;
   for (const auto& r : all) {
     if (r.effects.empty()) continue;  // the model as given
-    const bool alike = r.rank == 1 || (r.probability >= 0.05 * p1 && r.probability >= 0.001);
+    const bool alike = r.rank == 1 || diagnose::IsLookAlike(r.probability, p1);  // the first screen's rule
     if (!alike) continue;
     out.push_back({r.kind + " on " + r.target, r.effects, origin + ", candidate rank " + std::to_string(r.rank)});
     if (out.size() == limit) break;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace ema {
 namespace {
 
@@ -23,6 +25,16 @@ TEST(Direction, NamesRoundTrip) {
   EXPECT_EQ(DirectionName(-3), "-Z");
   EXPECT_EQ(ParseDirection("x"), 1);
   EXPECT_EQ(ParseDirection("+Q"), 0);
+}
+
+TEST(Direction, CodesOutsideTheAxesAreNamedWithoutOverflow) {
+  // A code no reader makes is still printable (a fuzzed typed result, a corrupt record); the
+  // negation for INT_MIN overflowed before (UBSan: "negation of -2147483648 cannot be represented").
+  EXPECT_EQ(DirectionName(7), "?7");
+  EXPECT_EQ(DirectionName(-7), "?-7");
+  EXPECT_EQ(DirectionName(std::numeric_limits<int>::min()), "?-2147483648");
+  EXPECT_EQ(DirectionName(std::numeric_limits<int>::max()), "?2147483647");
+  EXPECT_EQ(DirectionName(0), "S");
 }
 
 TEST(Pole, FrequencyAndDampingRoundTrip) {

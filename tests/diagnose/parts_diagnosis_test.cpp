@@ -3,6 +3,7 @@
 // 58 measured DOFs, frequencies with their σ. Known truths: one member part softened, one group
 // softened, a part plus an added mass, and a model missing what no part can express.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <fstream>
@@ -22,12 +23,22 @@ namespace {
 namespace fs = std::filesystem;
 using model::EffectKind;
 
-const fs::path kDir = fs::path(EMA_TEST_TMP_DIR) / "diagnose" / "frame";
+// One folder per process: ctest -j runs these tests as separate processes at once, and a shared
+// folder let one process rewrite the frame's files while another read them (a flake of
+// PartsDiagnosis.APartPlusAnAddedMass under ctest -j2).
+const fs::path kDir = fs::path(EMA_TEST_TMP_DIR) / "diagnose" / ("frame-" + std::to_string(::getpid()));
 
-// The frame, written once per test program.
+// The frame, written once per test program and removed when it ends.
 const ema::testing::FrameFiles& Frame() {
-  static const ema::testing::FrameFiles files = ema::testing::WriteFrame(kDir);
-  return files;
+  struct Written {
+    ema::testing::FrameFiles files = ema::testing::WriteFrame(kDir);
+    ~Written() {
+      std::error_code ec;
+      fs::remove_all(kDir, ec);
+    }
+  };
+  static const Written written;
+  return written.files;
 }
 
 // Test modes of `truth`: the lowest `count` vertical modes (most of their motion at the test points

@@ -53,8 +53,9 @@ inline std::string DirectionName(int code) {
   // Built by appending: GCC 12 warns falsely (-Wrestrict) on `"literal" + std::string` when inlined.
   std::string name;
   if (code == 0) return name.assign("S");
+  // Out of the named range first: negating INT_MIN would overflow.
+  if (code > 6 || code < -6) return name.append("?").append(std::to_string(code));
   const int a = code < 0 ? -code : code;
-  if (a > 6) return name.append("?").append(std::to_string(code));
   return name.append(code < 0 ? "-" : "+").append(kAxisNames[a - 1]);
 }
 
