@@ -279,9 +279,7 @@ std::string RunSummary(const pipeline::RunResult& run, const nlohmann::json& his
                   modes, agreement(r.correlation_before).c_str(), agreement(r.correlation_after).c_str());
     lines.push_back(line);
     if (project.tests[t].plan)  // a rehearsal: say that its data were simulated, and on what
-      lines.push_back("  " + std::string(12, ' ') + " simulated from " + project.tests[t].plan->filename().string() + " on " +
-                      (project.tests[t].truth ? project.tests[t].truth->filename().string() : "the project's model") +
-                      " (a rehearsal, not a measurement)");
+      lines.push_back("  " + std::string(12, ' ') + " " + report::RehearsalWords(project.tests[t]));
     if (r.fit && r.picked_by_hand)  // a hand pick is kept only in this run: say how to repeat it
       lines.push_back("  " + std::string(12, ' ') + " poles picked by hand (ema pick); to repeat without the browser: " +
                       "select = \"" + report::SelectText(r.fit_options.select_frequencies_hz) + "\" in its [[test]]");

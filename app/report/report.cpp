@@ -269,6 +269,7 @@ json BuildReportData(const ReportInput& input) {
     else if (setup.frfs)
       frf_count = setup.frfs->OutputCount() * setup.frfs->ReferenceCount();
     s["frf_count"] = frf_count;
+    if (!setup.rehearsal.empty()) s["rehearsal"] = setup.rehearsal;
     s["mode_count"] = test.modes.size();
     setups.push_back(std::move(s));
   }
@@ -323,6 +324,7 @@ ReportInput ReportInputOf(const pipeline::RunResult& run, const RunPage& page) {
     const pipeline::TestResult& r = run.tests[t];
     SetupResults s;
     s.name = test.name;
+    s.rehearsal = RehearsalWords(test);
     if (r.frf) s.frf_summary = formats::FrfSummaryJson(r.frf->result);
     if (r.fit && r.frfs) {
       s.stabilisation = pipeline::FitStabilisationJson(*r.fit, *r.frfs, run.FrfPath(t).string());

@@ -51,6 +51,7 @@ struct SetupResults {
   /// in `ema pick` during the run, "rule": FitResult::selection_rule, "command": the equivalent
   /// `ema fit` line, "modes_json": the modes file relative to the report}. Null: not shown.
   nlohmann::json selection;
+  std::string rehearsal;               ///< a simulated test: report::RehearsalWords ("" measured)
   double band_lo_hz = 0.0;             ///< fit band; 0/0 = the whole FRF range
   double band_hi_hz = 0.0;
 };

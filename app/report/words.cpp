@@ -15,6 +15,13 @@ std::string Significant(double value, int digits) {
   return text;
 }
 
+std::string RehearsalWords(const formats::ProjectTest& test) {
+  if (!test.plan) return "";
+  return "simulated from " + test.plan->filename().string() + " on " +
+         (test.truth ? test.truth->filename().string() : std::string("the project's model")) +
+         " (a rehearsal, not a measurement)";
+}
+
 std::string SelectText(const std::vector<double>& frequencies_hz) {
   if (frequencies_hz.empty()) return "auto";
   std::string list;

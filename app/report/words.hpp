@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ema/diagnose/diagnose.hpp"
+#include "ema/formats/project_file.hpp"
 #include "ema/pipeline/findings.hpp"
 
 namespace ema::report {
@@ -16,6 +17,10 @@ std::string Significant(double value, int digits = 3);
 
 /// "auto" (none) or the frequencies as `ema fit --select` takes them, each exactly (ExactNumberText).
 std::string SelectText(const std::vector<double>& frequencies_hz);
+
+/// A project test simulated from a plan (`plan =`): "simulated from plan.toml on variant.toml (a
+/// rehearsal, not a measurement)"; "" for a measured test.
+std::string RehearsalWords(const formats::ProjectTest& test);
 
 /// "12.3 %" of a probability in [0, 1].
 std::string Percent(double probability);

@@ -606,5 +606,27 @@ TEST(Report, RendersInHeadlessChromium) {
   EXPECT_EQ(r.rendered_divs, r.expected);
 }
 
+TEST(Report, ARehearsedTestSaysItWasSimulatedAndOnWhat) {
+  // A project test with plan = (a rehearsal in ema run) must never read as a measurement: the
+  // report's headline data carry the same words as the terminal summary; a measured test none.
+  pipeline::RunResult run;
+  formats::ProjectTest rehearsed, measured;
+  rehearsed.name = "stud-5um";
+  rehearsed.plan = "/work/plans/plan-stud-5um.toml";
+  rehearsed.truth = "/work/variants/loose-stud.toml";
+  measured.name = "stud-9um";
+  run.plan.project.tests = {rehearsed, measured};
+  run.tests.resize(2);
+  const ReportInput input = ReportInputOf(run, RunPage{});
+  ASSERT_EQ(input.setups.size(), 2u);
+  EXPECT_EQ(input.setups[0].rehearsal, "simulated from plan-stud-5um.toml on loose-stud.toml (a rehearsal, not a measurement)");
+  EXPECT_EQ(input.setups[1].rehearsal, "");
+  const nlohmann::json data = BuildReportData(input);
+  EXPECT_EQ(data["setups"][0]["rehearsal"], input.setups[0].rehearsal);
+  EXPECT_FALSE(data["setups"][1].contains("rehearsal"));
+  rehearsed.truth.reset();
+  EXPECT_EQ(RehearsalWords(rehearsed), "simulated from plan-stud-5um.toml on the project's model (a rehearsal, not a measurement)");
+}
+
 }  // namespace
 }  // namespace ema::report
