@@ -125,7 +125,7 @@ std::string Fixed(double value, int digits) { return FixedPoint(value, digits, "
 SimulateConfig RunSimulateConfig(const pipeline::RunResult& run, std::size_t test) {
   const formats::ProjectTest& t = run.plan.project.tests[test];
   SimulateConfig config;
-  config.model_path = (t.truth ? *t.truth : run.plan.project.model).string();
+  config.model_path = run.TruthPath(test).string();
   config.plan_path = t.plan ? t.plan->string() : std::string();
   config.output = run.TimePath(test).string();
   config.setup = t.setup;

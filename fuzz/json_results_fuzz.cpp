@@ -68,6 +68,21 @@ ema::model::Effect MakeEffect(Gen& g) {
   return e;
 }
 
+ema::diagnose::ModeComparison MakeModeComparison(Gen& g) {
+  ema::diagnose::ModeComparison m;
+  m.setup = g.Text();
+  m.test_mode = g.Int(-1, 100000);  // an index into the setup's modes
+  m.model_mode = g.Int(-1, 100000);
+  m.test_frequency_hz = g.Double();
+  m.model_frequency_hz = g.Double();
+  m.agreement_pct = g.Double();
+  m.mac = g.Double();
+  m.sigma_hz = g.Double();
+  m.frequency_misfit_sigma = g.Double();
+  m.shape_misfit_sigma = g.Double();
+  return m;
+}
+
 ema::diagnose::Candidate MakeCandidate(Gen& g) {
   ema::diagnose::Candidate c;
   c.effects.resize(g.Count(3));
@@ -99,18 +114,7 @@ ema::diagnose::Candidate MakeCandidate(Gen& g) {
   c.mean_agreement_pct = g.Double();
   c.paired_modes = g.AnyInt();
   c.modes.resize(g.Count(40));
-  for (auto& m : c.modes) {
-    m.setup = g.Text();
-    m.test_mode = g.Int(-1, 100000);  // an index into the setup's modes
-    m.model_mode = g.Int(-1, 100000);
-    m.test_frequency_hz = g.Double();
-    m.model_frequency_hz = g.Double();
-    m.agreement_pct = g.Double();
-    m.mac = g.Double();
-    m.sigma_hz = g.Double();
-    m.frequency_misfit_sigma = g.Double();
-    m.shape_misfit_sigma = g.Double();
-  }
+  for (auto& m : c.modes) m = MakeModeComparison(g);
   c.plausible = g.Bool();
   c.reduced_chi2 = g.Double();
   c.noise_consistent = g.Bool();
@@ -330,20 +334,6 @@ ema::correlation::AmplitudeResult MakeAmplitude(Gen& g) {
   return r;
 }
 
-ema::diagnose::ModeComparison MakeModeComparison(Gen& g) {
-  ema::diagnose::ModeComparison m;
-  m.setup = g.Text();
-  m.test_mode = g.Int(-1, 100000);
-  m.model_mode = g.Int(-1, 100000);
-  m.test_frequency_hz = g.Double();
-  m.model_frequency_hz = g.Double();
-  m.agreement_pct = g.Double();
-  m.mac = g.Double();
-  m.sigma_hz = g.Double();
-  m.frequency_misfit_sigma = g.Double();
-  m.shape_misfit_sigma = g.Double();
-  return m;
-}
 
 // The first screen as numbers (pipeline::FindingsOf's result): only "effects" reaches the JSON,
 // the rest is filled too so that a writer reading it is caught.

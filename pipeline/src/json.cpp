@@ -85,7 +85,7 @@ json RunResultJson(const RunResult& run) {
     json simulated = nullptr;  // a rehearsal's simulated test (plan = "PLAN.toml")
     if (r.simulated)
       simulated = {{"plan", project.tests[t].plan ? project.tests[t].plan->string() : std::string()},
-                   {"truth", (project.tests[t].truth ? *project.tests[t].truth : project.model).string()},
+                   {"truth", run.TruthPath(t).string()},
                    {"records", r.simulated->records.size()},
                    {"sets", r.simulated->sets},
                    {"references", r.simulated->references},

@@ -186,6 +186,11 @@ std::filesystem::path RunResult::TimePath(std::size_t test) const {
   return plan.output_dir / plan.project.tests[test].name / "time.unv";
 }
 
+std::filesystem::path RunResult::TruthPath(std::size_t test) const {
+  const formats::ProjectTest& t = plan.project.tests[test];
+  return t.truth ? *t.truth : plan.project.model;
+}
+
 std::filesystem::path RunResult::FrfPath(std::size_t test) const {
   const formats::ProjectTest& t = plan.project.tests[test];
   return t.frf ? *t.frf : plan.output_dir / t.name / "frf.unv";
@@ -240,7 +245,7 @@ RunResult Run(const RunPlan& plan, const ProgressCallback& progress) {
         const model::Model truth = test.truth ? formats::ReadModelFile(*test.truth) : nominal();
         formats::Plan test_plan = formats::ReadPlanFile(test.plan->string());
         if (!test.setup.empty()) test_plan.setup = test.setup;
-        r.simulated = SimulateTest(truth, test_plan, (test.truth ? *test.truth : project.model).string(),
+        r.simulated = SimulateTest(truth, test_plan, result.TruthPath(t).string(),
                                    test.plan->string(), progress);
       });
       if (simulated) {

@@ -123,6 +123,8 @@ struct RunResult {
   std::filesystem::path UpdatedModelPath() const { return plan.output_dir / "updated-model.toml"; }
   /// A planned test's simulated time data (OUTDIR/<test>/time.unv, UFF 58b).
   std::filesystem::path TimePath(std::size_t test) const;
+  /// The model a planned test is simulated on: its `truth`, else the project's model.
+  std::filesystem::path TruthPath(std::size_t test) const;
   /// The FRFs a test's fit reads: the project's FRF file, else the one the run estimates
   /// (OUTDIR/<test>/frf.unv).
   std::filesystem::path FrfPath(std::size_t test) const;
