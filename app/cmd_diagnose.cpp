@@ -115,6 +115,7 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
   DiagnoseConfig config;
   config.options = base;
   std::string criterion = diagnose::CriterionToString(config.options.criterion);
+  std::string shape_residual = diagnose::ShapeResidualToString(config.options.shape_residual);
   std::vector<std::string> tests;
   bool no_pairs = false, no_members = false, exact_form = false;
   double shape_weight = 0.0;
@@ -139,7 +140,12 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
       "no-members", po::bool_switch(&no_members), "only whole groups, all points and bodies (no members or single points)")(
       "frequency-floor", po::value(&dopt.frequency_floor)->default_value(dopt.frequency_floor),
       "relative 1σ floor of a test frequency; a mode's σ is max(its stabilisation spread, floor × f)")(
-      "shape-sigma", po::value(&dopt.shape_sigma)->default_value(dopt.shape_sigma), "1σ of (1 - MAC)")(
+      "shape-sigma", po::value(&dopt.shape_sigma)->default_value(dopt.shape_sigma), "1σ of (1 - MAC) (--shape-residual mac)")(
+      "shape-residual", po::value(&shape_residual)->default_value(shape_residual),
+      "how a test shape enters the likelihood: per-dof (its difference at each measured DOF in units of its σ "
+      "there) or mac (one (1 - MAC) per mode, as before 2026-11-27; docs/diagnose.md)")(
+      "shape-dof-sigma", po::value(&dopt.shape_dof_sigma)->default_value(dopt.shape_dof_sigma),
+      "floor of a shape's 1σ at one DOF, relative to its rms amplitude (--shape-residual per-dof)")(
       "exact-form", po::bool_switch(&exact_form),
       "take the model's form as exact: no model error in the likelihood (docs/diagnose.md \"Model error\"; "
       "for comparison with diagnoses made before it)")(
@@ -169,6 +175,8 @@ std::optional<app::DiagnoseConfig> app::ParseDiagnoseArgs(const std::vector<std:
   cli::RefuseOutputsOverInputs(vm, {"model", "test", "force-level"}, {"json", "output"});
   if (!diagnose::StringToCriterion(criterion, &dopt.criterion))
     throw UsageError("--criterion must be evidence, bic or aicc, got '" + criterion + "'");
+  if (!diagnose::StringToShapeResidual(shape_residual, &dopt.shape_residual))
+    throw UsageError("--shape-residual must be per-dof or mac, got '" + shape_residual + "'");
   if (no_pairs) dopt.max_effects = 1;
   if (no_members) dopt.members = false;
   if (exact_form) dopt.model_error = false;

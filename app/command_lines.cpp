@@ -110,6 +110,10 @@ std::string CommandLine(const DiagnoseConfig& config) {
   if (o.members != defaults.members) w.push_back("--no-members");
   if (o.frequency_floor != defaults.frequency_floor) w.insert(w.end(), {"--frequency-floor", ExactNumberText(o.frequency_floor)});
   if (o.shape_sigma != defaults.shape_sigma) w.insert(w.end(), {"--shape-sigma", ExactNumberText(o.shape_sigma)});
+  if (o.shape_residual != defaults.shape_residual)
+    w.insert(w.end(), {"--shape-residual", diagnose::ShapeResidualToString(o.shape_residual)});
+  if (o.shape_dof_sigma != defaults.shape_dof_sigma)
+    w.insert(w.end(), {"--shape-dof-sigma", ExactNumberText(o.shape_dof_sigma)});
   if (o.model_error != defaults.model_error) w.push_back("--exact-form");
   if (o.effect_prior_odds != defaults.effect_prior_odds)
     w.insert(w.end(), {"--effect-prior-odds", ExactNumberText(o.effect_prior_odds)});

@@ -1532,7 +1532,7 @@ PYBIND11_MODULE(_ema, m) {
       "diagnose",
       [](const py::object& model_arg, const py::object& tests, const std::string& criterion, int max_effects, bool members,
          double frequency_floor, double shape_sigma, double mac_min, double sensor_mass, double effect_prior_odds,
-         bool exact_form) {
+         bool exact_form, const std::string& shape_residual, double shape_dof_sigma) {
         namespace dg = ema::diagnose;
         const ema::model::Model model = ToModel(model_arg);
         if (!(sensor_mass >= 0.0) || !std::isfinite(sensor_mass))
@@ -1562,6 +1562,10 @@ PYBIND11_MODULE(_ema, m) {
         opt.members = members;
         opt.frequency_floor = frequency_floor;
         opt.shape_sigma = shape_sigma;
+        if (!dg::StringToShapeResidual(shape_residual, &opt.shape_residual))
+          throw ema::UsageError("shape_residual: '" + shape_residual + "' is not one ema diagnose --shape-residual "
+                                "takes (per-dof, mac)");
+        opt.shape_dof_sigma = shape_dof_sigma;
         opt.pairing.mac_min = mac_min;
         opt.effect_prior_odds = effect_prior_odds;
         opt.model_error = !exact_form;
@@ -1586,6 +1590,8 @@ PYBIND11_MODULE(_ema, m) {
       py::arg("frequency_floor") = defaults.frequency_floor, py::arg("shape_sigma") = defaults.shape_sigma,
       py::arg("mac_min") = defaults.pairing.mac_min, py::arg("sensor_mass") = 0.0,
       py::arg("effect_prior_odds") = defaults.effect_prior_odds, py::arg("exact_form") = false,
+      py::arg("shape_residual") = ema::diagnose::ShapeResidualToString(defaults.shape_residual),
+      py::arg("shape_dof_sigma") = defaults.shape_dof_sigma,
       "Which physical effect is the model missing, where, and how sure? As `ema diagnose`.\n\n"
       "model: a model file, or an FE model built from parts in Python (a dict with dofs, mass, stiffness, parts\n"
       "  as scipy.sparse or numpy matrices, nodes, points, damping: see help(ema.model_modes)).\n"
@@ -1599,7 +1605,8 @@ PYBIND11_MODULE(_ema, m) {
       "criterion: 'evidence' (default: '' = the CLI's), 'bic' or 'aicc'. Keyword options as the CLI's:\n"
       "max_effects (1..3), members (False = --no-members), frequency_floor, shape_sigma, mac_min, sensor_mass (kg\n"
       "per measured node, the test's own sensors), effect_prior_odds (--effect-prior-odds, 0 < odds <= 1),\n"
-      "exact_form (--exact-form: no model error in the likelihood).\n\n"
+      "exact_form (--exact-form: no model error in the likelihood), shape_residual ('per-dof' or 'mac',\n"
+      "--shape-residual), shape_dof_sigma (--shape-dof-sigma).\n\n"
       "Returns `ema diagnose --json`'s layout (DIAG.json, cli.md) as a dict: 'candidates' ranked (rank 1 first;\n"
       "each with kind, target, parameters, uncertainty, probability, mean_abs_frequency_error_pct, mean_mac,\n"
       "score, description, effects, the evidence per test mode), 'baseline', 'effect_probabilities', 'groups',\n"

@@ -6,6 +6,8 @@
   bench.py check  --ema EMA --cases 0:21 --floor 0.9 [--work DIR]      (the CI test)
   bench.py run    --ema EMA --family form --cases 0:60 [--jobs N]       (the model-form family)
   bench.py run    --ema EMA --cases 0:200 --replan                        (look-alikes: the follow-up test ema plan makes)
+  bench.py run    --ema EMA --keep ... then --reuse --diagnose-arg=--shape-residual --diagnose-arg=mac
+                  (the same simulated tests diagnosed with other options)
 
 `run` generates each case (cases.py), puts it through the real chain with the built `ema`
 (simulate -> frf -> fit -> diagnose -> correlate) and writes WORK/scores/case-NNNN.json; cases
@@ -314,6 +316,9 @@ def run_case(ema, index, seed, work, keep, family=None, replan_lookalikes=False)
                 .replace("{plan_seed}", str(1000 * index + k + 1)).replace("{pulse}", f"{pulse:.6g}"))
         with open(os.path.join(folder, f"plan-{tag(s)}.toml"), "w") as f:
             f.write(plan)
+        if REUSE_TESTS and os.path.isfile(os.path.join(folder, f"modes-{tag(s)}.unv")):
+            tests.append((s, f"modes-{tag(s)}.unv"))  # --reuse: the kept test of an earlier --keep run
+            continue
         for step, args in (("simulate", ["simulate", "simulate.toml", "--plan", f"plan-{tag(s)}.toml",
                                          "-o", f"time-{tag(s)}.unv", "--binary"] + sflag(s)),
                            ("frf", ["frf", f"time-{tag(s)}.unv", "-o", f"frf-{tag(s)}.unv"]),
@@ -324,7 +329,8 @@ def run_case(ema, index, seed, work, keep, family=None, replan_lookalikes=False)
     args = ["diagnose", "nominal.toml"]
     for s, modes in tests:
         args += ["--test", f"{s}={modes}" if s else modes]
-    times["diagnose"] = run_ema(ema, args + ["--json", "diag.json", "-o", "updated.toml"], folder, "diagnose.log")
+    times["diagnose"] = run_ema(ema, args + ["--json", "diag.json", "-o", "updated.toml"] + DIAGNOSE_ARGS, folder,
+                                "diagnose.log")
     corr_after, corr_before = [], []
     t1 = time.monotonic()
     for s, modes in tests:
@@ -389,7 +395,16 @@ def parse_range(text):
     return sorted(set(out))
 
 
+# Extra `ema diagnose` arguments (--diagnose-arg) and whether kept tests are reused (--reuse): to
+# compare diagnosis options on the same simulated tests.
+DIAGNOSE_ARGS = []
+REUSE_TESTS = False
+
+
 def run_range(args):
+    global REUSE_TESTS
+    DIAGNOSE_ARGS[:] = getattr(args, "diagnose_arg", None) or []
+    REUSE_TESTS = getattr(args, "reuse", False)
     if not (os.path.isfile(args.ema) and os.access(args.ema, os.X_OK)):
         print(f"bench.py: the ema executable is missing or not executable: {args.ema}", file=sys.stderr)
         sys.exit(2)
@@ -433,6 +448,12 @@ def main():
         q.add_argument("--replan", action="store_true",
                        help="when rank 1 has look-alikes, plan the follow-up test (ema plan --candidates --keep), "
                             "test again and diagnose (docs/plan.md)")
+        q.add_argument("--diagnose-arg", action="append", default=[],
+                       help="an extra `ema diagnose` argument (repeat for several: --diagnose-arg=--shape-residual "
+                            "--diagnose-arg=mac)")
+        q.add_argument("--reuse", action="store_true",
+                       help="reuse each case's kept test (an earlier run with --keep and the same --work): only "
+                            "diagnose and correlate run again, to compare diagnosis options on the same data")
         if name == "check":
             q.add_argument("--floor", type=float, required=True, help="minimum share right at rank 1")
     g = sub.add_parser("gather")

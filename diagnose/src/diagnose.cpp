@@ -18,6 +18,8 @@ bool DiagnoseOptions::IsValid(std::string* error) const {
   std::string why;
   if (!(frequency_floor > 0.0)) why = "frequency_floor must be > 0, got " + std::to_string(frequency_floor);
   else if (!(shape_sigma > 0.0)) why = "shape_sigma must be > 0, got " + std::to_string(shape_sigma);
+  else if (!(shape_dof_sigma > 0.0) || !std::isfinite(shape_dof_sigma))
+    why = "shape_dof_sigma must be > 0, got " + std::to_string(shape_dof_sigma);
   else if (!(robust_threshold > 0.0)) why = "robust_threshold must be > 0, got " + std::to_string(robust_threshold);
   else if (scan_points < 3) why = "scan_points must be >= 3, got " + std::to_string(scan_points);
   else if (max_effects < 1 || max_effects > 3) why = "max_effects must be 1, 2 or 3, got " + std::to_string(max_effects);
@@ -43,6 +45,12 @@ std::string CriterionToString(Criterion criterion) { return NameOf(kCriterionNam
 
 bool StringToCriterion(const std::string& name, Criterion* criterion) {
   return FromName(kCriterionNames, name, criterion);
+}
+
+std::string ShapeResidualToString(ShapeResidual shape_residual) { return NameOf(kShapeResidualNames, shape_residual); }
+
+bool StringToShapeResidual(const std::string& name, ShapeResidual* shape_residual) {
+  return FromName(kShapeResidualNames, name, shape_residual);
 }
 
 namespace {
@@ -101,6 +109,9 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
     s.sigma_hz.resize(n);
     s.sigma_shape.resize(n);
     s.half_power_hz.resize(n);
+    const Eigen::Index measured_dofs = s.test_shapes.rows();
+    s.real_shapes.resize(measured_dofs, n);
+    s.sigma_dof.resize(measured_dofs, n);
     for (Eigen::Index i = 0; i < n; ++i) {
       const Mode& m = t.modes.modes[static_cast<size_t>(i)];
       s.test_hz(i) = m.frequency_hz;
@@ -115,6 +126,21 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
       // shape at 1 − MAC = 0.26 weighs as 26 σ and spurious effects are "found" to reshape it.
       const double complexity = 1.0 - detail::PhaseCollinearity(s.test_shapes.col(i));
       s.sigma_shape(i) = std::hypot(options.shape_sigma, std::max(0.0, complexity));
+      // The same per DOF (ShapeResidual::kPerDof), in units of the unit-norm shape: the floor
+      // relative to its rms amplitude, the fit's σ of |φ| there, and the out-of-phase part.
+      Eigen::VectorXd out_of_phase;
+      const Eigen::VectorXd real = detail::RealShape(s.test_shapes.col(i), &out_of_phase);
+      const double norm = s.test_shapes.col(i).norm();
+      const double floor = options.shape_dof_sigma / std::sqrt(static_cast<double>(std::max<Eigen::Index>(1, measured_dofs)));
+      for (Eigen::Index d = 0; d < measured_dofs; ++d) {
+        const int test_index = s.match.shared[static_cast<size_t>(d)].test_index;
+        const double fitted = m.shape_std.size() == m.shape.size() && test_index >= 0 && test_index < m.shape_std.size() &&
+                                      std::isfinite(m.shape_std(test_index))
+                                  ? m.shape_std(test_index)
+                                  : 0.0;
+        s.real_shapes(d, i) = norm > 0.0 ? real(d) / norm : 0.0;
+        s.sigma_dof(d, i) = norm > 0.0 ? std::hypot(floor, std::hypot(fitted, out_of_phase(d)) / norm) : 1.0;
+      }
       // Two model modes closer than the half-power bandwidth 2ζf (modal overlap > 1) are one
       // subspace to a hammer test: which basis of it the test returns depends on asymmetries no
       // model holds, so the fitted shape is judged against their span (BlendMac).
@@ -306,7 +332,7 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
   detail::Evaluator evaluator(base, PrepareSetups(base, tests, options, max_modes), options, max_modes);
   Diagnosis result;
   result.residual_count = evaluator.ResidualCount();
-  result.test_mode_count = result.residual_count / 2;
+  result.test_mode_count = evaluator.TestModeCount();
 
   // Stage 1: candidates.
   std::vector<detail::Atom> atoms = detail::BuildAtoms(base, options);

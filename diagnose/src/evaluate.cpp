@@ -1,5 +1,6 @@
 // Residuals of one model variant against every setup's test modes: per test mode, the frequency
-// error in units of that mode's σ and (1 − MAC) in units of the shape σ. Pairing is redone at
+// error in units of that mode's σ and the shape's difference at each measured DOF in units of its
+// σ there (or one (1 − MAC) in units of the shape σ). Pairing is redone at
 // every evaluation, so mode swaps while the parameters move are followed.
 #include <Eigen/Dense>
 #include <algorithm>
@@ -49,11 +50,48 @@ double BlendMac(const Eigen::VectorXcd& test_shape, const Eigen::MatrixXcd& mode
   return plain_mac + weight * std::max(0.0, subspace - plain_mac);
 }
 
+Eigen::VectorXd RealShape(const Eigen::VectorXcd& shape, Eigen::VectorXd* out_of_phase) {
+  const std::complex<double> sum_squares = shape.cwiseProduct(shape).sum();
+  const std::complex<double> turn = std::polar(1.0, -0.5 * std::arg(sum_squares));
+  const Eigen::VectorXcd turned = shape * turn;
+  if (out_of_phase) *out_of_phase = turned.imag();
+  return turned.real();
+}
+
+Eigen::VectorXd ShapeDifference(const Eigen::VectorXd& test_real, const Eigen::MatrixXcd& model_shapes,
+                                const Eigen::VectorXd& model_hz, int j, double half_power_hz) {
+  // Least-squares fit of the test shape by the columns of `basis`.
+  auto fitted_by = [&](const Eigen::MatrixXd& basis) -> Eigen::VectorXd {
+    const Eigen::MatrixXd gram = basis.transpose() * basis;
+    if (!(gram.trace() > 0.0)) return Eigen::VectorXd::Zero(test_real.size());
+    return basis * gram.completeOrthogonalDecomposition().solve(basis.transpose() * test_real);
+  };
+  const Eigen::MatrixXd own = RealShape(model_shapes.col(j));
+  const Eigen::VectorXd plain = test_real - fitted_by(own);
+  if (!(half_power_hz > 0.0)) return plain;
+  // The close neighbours and the weight of the closest, as BlendMac.
+  std::vector<Eigen::Index> cols{j};
+  double weight = 0.0;
+  for (Eigen::Index k = 0; k < model_hz.size(); ++k) {
+    if (k == j) continue;
+    const double z = (model_hz(k) - model_hz(j)) / half_power_hz;
+    if (std::abs(z) > 3.0) continue;
+    cols.push_back(k);
+    weight = std::max(weight, std::exp(-z * z));
+  }
+  if (cols.size() == 1) return plain;
+  Eigen::MatrixXd basis(model_shapes.rows(), static_cast<Eigen::Index>(cols.size()));
+  for (size_t c = 0; c < cols.size(); ++c) basis.col(static_cast<Eigen::Index>(c)) = RealShape(model_shapes.col(cols[c]));
+  const Eigen::VectorXd in_span = test_real - fitted_by(basis);
+  return (1.0 - weight) * plain + weight * in_span;
+}
+
 double Huber(double s, double a) { return s <= a * a ? s : 2.0 * a * std::sqrt(s) - a * a; }
 
-double RobustCost(const Eigen::VectorXd& r, double a) {
+double RobustCost(const Eigen::VectorXd& r, const std::vector<int>& block_start, double a) {
   double cost = 0.0;
-  for (Eigen::Index i = 0; i + 1 < r.size(); i += 2) cost += Huber(r(i) * r(i) + r(i + 1) * r(i + 1), a);
+  for (size_t b = 0; b + 1 < block_start.size(); ++b)
+    cost += Huber(r.segment(block_start[b], block_start[b + 1] - block_start[b]).squaredNorm(), a);
   return cost;
 }
 
@@ -72,22 +110,37 @@ struct Evaluator::Reduced {
 Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options,
                      int max_modes)
     : base_(base), setups_(std::move(setups)), options_(options), max_modes_(max_modes) {
-  for (const auto& s : setups_) residual_count_ += 2 * static_cast<int>(s.test_hz.size());
-  model_error_gain_.resize(residual_count_);
-  Eigen::VectorXd log_hz(residual_count_ / 2);
-  int row = 0;
+  const bool per_dof = options.shape_residual == ShapeResidual::kPerDof;
+  block_start_.push_back(0);
   for (const auto& s : setups_)
-    for (Eigen::Index i = 0; i < s.test_hz.size(); ++i, row += 2) {
+    for (Eigen::Index i = 0; i < s.test_hz.size(); ++i)
+      block_start_.push_back(block_start_.back() + 1 + (per_dof ? static_cast<int>(s.real_shapes.rows()) : 1));
+  residual_count_ = block_start_.back();
+  model_error_gain_.resize(residual_count_);
+  frequency_row_.assign(static_cast<size_t>(residual_count_), false);
+  Eigen::VectorXd log_hz(TestModeCount());
+  int mode = 0;
+  for (const auto& s : setups_)
+    for (Eigen::Index i = 0; i < s.test_hz.size(); ++i, ++mode) {
+      const int row = block_start_[static_cast<size_t>(mode)];
+      frequency_row_[static_cast<size_t>(row)] = true;
       model_error_gain_(row) = s.test_hz(i) / s.sigma_hz(i);
-      model_error_gain_(row + 1) = 1.0 / s.sigma_shape(i);
-      log_hz(row / 2) = std::log(std::max(s.test_hz(i), 1e-300));
+      if (per_dof) {
+        // ε_s is the rms error of a unit-norm shape, spread over its d DOFs: ε_s / √d at each.
+        const double per_row = 1.0 / std::sqrt(static_cast<double>(std::max<Eigen::Index>(1, s.real_shapes.rows())));
+        for (Eigen::Index d = 0; d < s.real_shapes.rows(); ++d)
+          model_error_gain_(row + 1 + d) = per_row / s.sigma_dof(d, i);
+      } else {
+        model_error_gain_(row + 1) = 1.0 / s.sigma_shape(i);
+      }
+      log_hz(mode) = std::log(std::max(s.test_hz(i), 1e-300));
     }
   model_error_trend_ = Eigen::VectorXd::Zero(residual_count_);
   if (log_hz.size() > 0) {
     const double mean = log_hz.mean();
     const double sd = std::sqrt((log_hz.array() - mean).square().mean());
     if (sd > 1e-9)
-      for (Eigen::Index i = 0; i < log_hz.size(); ++i) model_error_trend_(2 * i) = (log_hz(i) - mean) / sd;
+      for (Eigen::Index i = 0; i < log_hz.size(); ++i) model_error_trend_(block_start_[i]) = (log_hz(i) - mean) / sd;
   }
   int dofs = 6 * static_cast<int>(base.bodies.size()) + base.fe.Size();
   reduced_ = options.reduced_model_min_dofs > 0 && dofs >= options.reduced_model_min_dofs;
@@ -141,7 +194,7 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
     out.error = e.what();
     return out;
   }
-  const int test_modes = residual_count_ / 2;
+  const int test_modes = TestModeCount();
   // Only part factors changed (no spring, body or point mass): the reduced model skips assembling
   // the rest again.
   bool rest_changed = false;
@@ -233,8 +286,9 @@ Evaluation Evaluator::Compare(
     const std::function<model::Solution(std::size_t setup, const std::vector<model::PointMass>&)>& solve) {
   Evaluation out;
   out.r.resize(residual_count_);
+  const bool per_dof = options_.shape_residual == ShapeResidual::kPerDof;
   try {
-    int row = 0;
+    int mode = 0;
     double sum_err = 0.0, sum_mac = 0.0, sum_agreement = 0.0;
     for (std::size_t index = 0; index < setups_.size(); ++index) {
       const SetupData& s = setups_[index];
@@ -256,7 +310,9 @@ Evaluation Evaluator::Compare(
       const correlation::Pairing pairing = correlation::PairModes(mac, s.test_hz, model_hz, options_.pairing);
       std::vector<int> partner(s.test_hz.size(), -1);
       for (const correlation::ModePair& p : pairing.pairs) partner[p.test] = p.model;
-      for (Eigen::Index i = 0; i < s.test_hz.size(); ++i) {
+      for (Eigen::Index i = 0; i < s.test_hz.size(); ++i, ++mode) {
+        const int row = block_start_[static_cast<size_t>(mode)];
+        const int shape_rows = block_start_[static_cast<size_t>(mode) + 1] - row - 1;
         ModeComparison c;
         c.setup = s.name;
         c.test_mode = static_cast<int>(i);
@@ -269,20 +325,29 @@ Evaluation Evaluator::Compare(
           c.agreement_pct = correlation::AgreementPct(model_hz(j), s.test_hz(i));
           c.mac = mac(i, j);
           out.r(row) = (model_hz(j) - s.test_hz(i)) / s.sigma_hz(i);
-          const double judged =
-              BlendMac(s.test_shapes.col(i), model_shapes, model_hz, j, mac(i, j), s.half_power_hz(i));
-          out.r(row + 1) = (1.0 - judged) / s.sigma_shape(i);
+          if (per_dof) {
+            out.r.segment(row + 1, shape_rows) =
+                ShapeDifference(s.real_shapes.col(i), model_shapes, model_hz, j, s.half_power_hz(i))
+                    .cwiseQuotient(s.sigma_dof.col(i));
+          } else {
+            const double judged =
+                BlendMac(s.test_shapes.col(i), model_shapes, model_hz, j, mac(i, j), s.half_power_hz(i));
+            out.r(row + 1) = (1.0 - judged) / s.sigma_shape(i);
+          }
           sum_err += 100.0 * std::abs(model_hz(j) - s.test_hz(i)) / s.test_hz(i);
           sum_mac += mac(i, j);
           sum_agreement += c.agreement_pct;
           ++out.paired;
         } else {
           out.r(row) = options_.unpaired_frequency_residual * s.test_hz(i) / s.sigma_hz(i);
-          out.r(row + 1) = 1.0 / s.sigma_shape(i);
+          // Nothing of the shape explained (MAC 0).
+          if (per_dof) out.r.segment(row + 1, shape_rows) = s.real_shapes.col(i).cwiseQuotient(s.sigma_dof.col(i));
+          else out.r(row + 1) = 1.0 / s.sigma_shape(i);
         }
         c.frequency_misfit_sigma = out.r(row);
-        c.shape_misfit_sigma = out.r(row + 1);
-        row += 2;
+        // Per DOF: the rms over the shape's DOFs, so that a shape within its noise reads about 1σ.
+        c.shape_misfit_sigma =
+            per_dof ? out.r.segment(row + 1, shape_rows).norm() / std::sqrt(std::max(1, shape_rows)) : out.r(row + 1);
         out.modes.push_back(c);
       }
     }
@@ -291,7 +356,7 @@ Evaluation Evaluator::Compare(
       out.mean_mac = sum_mac / out.paired;
       out.mean_agreement_pct = sum_agreement / out.paired;
     }
-    out.cost = RobustCost(out.r, options_.robust_threshold);
+    out.cost = RobustCost(out.r, block_start_, options_.robust_threshold);
     out.ok = true;
   } catch (const std::exception& e) {
     out.ok = false;

@@ -143,10 +143,10 @@ Candidate MakeCandidate(Problem* p, const Fit& f, double baseline_cost) {
   c.reduced_model = !f.exact;
   c.model_error = f.model_error;
   {
-    // Reduced χ² of the frequencies (cli.md): the even residuals are the frequency errors in σ.
+    // Reduced χ² of the frequencies (cli.md): each test mode's frequency error in σ.
     double chi2 = 0.0;
     int modes = 0;
-    for (Eigen::Index i = 0; i + 1 < e.r.size(); i += 2, ++modes) chi2 += e.r(i) * e.r(i);
+    for (const ModeComparison& m : e.modes) chi2 += m.frequency_misfit_sigma * m.frequency_misfit_sigma, ++modes;
     const int dof = std::max(1, modes - static_cast<int>(f.atoms.size()));
     c.reduced_chi2 = chi2 / dof;
     c.noise_consistent =

@@ -90,7 +90,11 @@ struct SetupData {
   Eigen::MatrixXcd test_shapes;
   Eigen::VectorXd test_hz;
   Eigen::VectorXd sigma_hz;  ///< 1σ of each test frequency
-  Eigen::VectorXd sigma_shape;  ///< 1σ of each test mode's (1 − MAC)
+  Eigen::VectorXd sigma_shape;  ///< 1σ of each test mode's (1 − MAC) (ShapeResidual::kOneMinusMac)
+  /// ShapeResidual::kPerDof: each test shape made real (rotated by its principal phase) and divided
+  /// by its norm, one column per mode over the matched DOFs, and its 1σ per DOF in those units.
+  Eigen::MatrixXd real_shapes;
+  Eigen::MatrixXd sigma_dof;
   Eigen::VectorXd half_power_hz;  ///< 2ζf of each test mode: model modes closer than this blend
   size_t model_dof_count = 0;
   /// The test's sensors per roving set (empty: none declared): each set is solved with its own.
@@ -111,7 +115,9 @@ model::Solution AsTested(const SetupData& setup, const std::vector<model::Soluti
 struct Evaluation {
   bool ok = false;
   std::string error;
-  Eigen::VectorXd r;  ///< 2 per test mode (frequency, shape) in σ, setups in order
+  /// Per test mode a block (Evaluator::BlockStart): its frequency error, then its shape residual
+  /// (one row, or one per measured DOF), in σ; setups in order.
+  Eigen::VectorXd r;
   std::vector<ModeComparison> modes;
   double cost = 0.0;  ///< robust (Huber) sum over modes
   double mean_abs_frequency_error_pct = kNaN;
@@ -125,9 +131,16 @@ class Evaluator {
   Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options, int max_modes);
   ~Evaluator();
   int ResidualCount() const { return residual_count_; }
-  /// Per residual, its measurement σ in units of the model-error scale: f_test / σ_f for a
-  /// frequency, 1 / σ_shape for a shape. A model error ε adds (ε · gain)² to its variance in σ².
+  /// Where each test mode's block of residuals starts (one more entry: the end): its frequency
+  /// row first, then its shape rows.
+  const std::vector<int>& BlockStart() const { return block_start_; }
+  int TestModeCount() const { return static_cast<int>(block_start_.size()) - 1; }
+  /// Per residual, the model-error scale in units of its measurement σ: f_test / σ_f for a
+  /// frequency, 1 / σ_shape for a (1 − MAC) row, 1 / (√d · σ_dof) for a shape DOF of d. A model
+  /// error ε adds (ε · gain)² to its variance in σ².
   const Eigen::VectorXd& ModelErrorGain() const { return model_error_gain_; }
+  /// Per residual: true on frequency rows (ε_f), false on shape rows (ε_s).
+  const std::vector<bool>& FrequencyRow() const { return frequency_row_; }
   /// Per residual row: ln f of its test mode standardised over every test mode (0 on shape rows
   /// and when all modes share one frequency) — the pattern of a model error that grows or shrinks
   /// with frequency (shear and rotary inertia a beam model lacks, a mesh too coarse).
@@ -157,6 +170,8 @@ class Evaluator {
   const DiagnoseOptions& options_;
   int max_modes_ = 0;
   int residual_count_ = 0;
+  std::vector<int> block_start_;
+  std::vector<bool> frequency_row_;
   Eigen::VectorXd model_error_gain_;
   Eigen::VectorXd model_error_trend_;
   int solves_ = 0;
@@ -168,6 +183,18 @@ class Evaluator {
 /// Modal phase collinearity of a complex shape (1 = a real mode up to one phase, 0 = circular).
 double PhaseCollinearity(const Eigen::VectorXcd& shape);
 
+/// A complex shape as a real one: rotated by the phase that makes it most nearly real
+/// (½ arg Σ φ²), its real part returned and the out-of-phase part in `out_of_phase` (both in the
+/// shape's own units; a real mode has none).
+Eigen::VectorXd RealShape(const Eigen::VectorXcd& shape, Eigen::VectorXd* out_of_phase = nullptr);
+
+/// The first-order shape residual of a real, unit-norm test shape against model mode `j`: the
+/// test shape minus its least-squares fit by model mode `j`, blended toward its fit by the span of
+/// `j` and the model modes too close to tell apart with the same weight BlendMac uses. Its squared
+/// norm is 1 − MAC (blended) of the real shapes.
+Eigen::VectorXd ShapeDifference(const Eigen::VectorXd& test_real, const Eigen::MatrixXcd& model_shapes,
+                                const Eigen::VectorXd& model_hz, int j, double half_power_hz);
+
 /// The MAC a test shape is judged by against model mode `j`: its MAC with `j`, raised toward its
 /// MAC with the subspace of `j` and the model modes too close to `j` for a hammer test to
 /// separate (weight exp(−(Δf / half-power bandwidth)²) of the closest one).
@@ -176,7 +203,8 @@ double BlendMac(const Eigen::VectorXcd& test_shape, const Eigen::MatrixXcd& mode
 
 /// Huber cost of one mode's residual pair (s = squared norm): s for s ≤ a², 2a√s − a² beyond.
 double Huber(double s, double a);
-double RobustCost(const Eigen::VectorXd& r, double a);
+/// Σ over the mode blocks of Huber(|r_block|², a).
+double RobustCost(const Eigen::VectorXd& r, const std::vector<int>& block_start, double a);
 
 // ---- fits (fit.cpp) ----
 
@@ -195,6 +223,9 @@ struct Fit {
   double search_score = kInf;
   Eigen::VectorXd sigma_theta;
   ModelError model_error;   ///< the most probable model-error scales (DiagnoseOptions::model_error)
+  /// Per test mode, the most probable model error of its shape (each mode has its own: a pair of
+  /// close modes mixed by the model's error is off where the rest are not). Empty: none inferred.
+  Eigen::VectorXd shape_error_per_mode;
   bool ok = false;
   bool exact = true;        ///< eval from full solves (false: through a reduced model)
   std::string error;

@@ -448,6 +448,8 @@ json DiagnosisJson(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions
   if (!d.candidates.empty()) out["model_error"] = out["candidates"].front()["model_error"];  // rank 1's (cli.md)
   out["criterion"] = diagnose::CriterionToString(options.criterion);
   out["options"] = {{"frequency_floor", options.frequency_floor}, {"shape_sigma", options.shape_sigma},
+                    {"shape_residual", diagnose::ShapeResidualToString(options.shape_residual)},
+                    {"shape_dof_sigma", options.shape_dof_sigma},
                     {"max_effects", options.max_effects}, {"members", options.members},
                     {"model_error", options.model_error}, {"effect_prior_odds", options.effect_prior_odds},
                     {"mac_min", options.pairing.mac_min}};  // the effective options, for reproducibility

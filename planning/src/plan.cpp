@@ -30,7 +30,8 @@ bool PlanOptions::IsValid(std::string* why) const {
   else if (!(min_reference_participation > 0.0 && min_reference_participation < 1.0))
     bad = "min_reference_participation must be in (0, 1)";
   else if (!(automac_limit > 0.0 && automac_limit < 1.0)) bad = "automac_limit must be in (0, 1)";
-  else if (!(frequency_sigma_rel > 0.0) || !(shape_sigma > 0.0)) bad = "frequency_sigma_rel and shape_sigma must be > 0";
+  else if (!(frequency_sigma_rel > 0.0) || !(shape_dof_sigma > 0.0))
+    bad = "frequency_sigma_rel and shape_dof_sigma must be > 0";
   else if (!(sensor_mass_kg >= 0.0) || !std::isfinite(sensor_mass_kg)) bad = "sensor mass (--sensor-mass) must be >= 0 kg";
   else if (impacts < 1) bad = "impacts must be >= 1";
   if (why) *why = bad;
@@ -421,8 +422,11 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
       for (int g : set) add(&st, g, 1.0);
       return st;
     };
-    // The separation of pair q at a set (its sums): frequencies and 1 − MAC in σ over the target
-    // modes the references excite and the set sees — the figure reported and the exchange's.
+    // The separation of pair q at a set (its sums): frequencies and shapes in σ over the target
+    // modes the references excite and the set sees — the figure reported and the exchange's. The
+    // shapes as the diagnosis weighs them (docs/diagnose.md "Shapes in the likelihood"): per DOF,
+    // in units of shape_dof_sigma × the rms amplitude, so a mode's shape term is Σ_d r_d² =
+    // rows · (1 − MAC) / shape_dof_sigma² over the set's rows.
     auto separation_of = [&](const State& st, size_t q) {
       double sum = 0.0;
       for (Eigen::Index j = 0; j < m; ++j) {
@@ -431,8 +435,8 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
           continue;
         const Sums& t = st.sums[slot];
         const double mac = t.xx > 0.0 && t.yy > 0.0 ? t.xy * t.xy / (t.xx * t.yy) : 1.0;
-        const double shape = (1.0 - mac) / options.shape_sigma;
-        sum += frequency_term[slot] + shape * shape;
+        sum += frequency_term[slot] +
+               static_cast<double>(st.rows) * std::max(0.0, 1.0 - mac) / (options.shape_dof_sigma * options.shape_dof_sigma);
       }
       return std::sqrt(sum);
     };

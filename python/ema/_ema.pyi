@@ -120,6 +120,8 @@ def diagnose(
     sensor_mass: float = 0.0,
     effect_prior_odds: float = 0.25,
     exact_form: bool = False,
+    shape_residual: Literal["per-dof", "mac"] = "per-dof",
+    shape_dof_sigma: float = 0.1,
 ) -> DiagnosisDict:
     """Which physical effect is the model missing, where, and how sure? As `ema diagnose`; returns
     DIAG.json's layout ('candidates' ranked, rank 1 first)."""

@@ -15,15 +15,17 @@ namespace {
 
 TEST(DiagnoseWords, AModelWrongOutsideTheVocabularySaysSoFirst) {
   // The two-body stack of the diagnosis benchmark with every body 1.2 % heavier than its model
-  // and every spring off by 1 % of its own (seed 11): each mode about 0.6 % low, the test's σ
-  // 0.1 % (the truth of ModelError.AMassSpreadOverTheBodiesIsTheModelsErrorNotAnAddedMass).
+  // and every spring off by 1 % of its own (seed 12): each mode about 0.6 % low, the test's σ
+  // 0.1 % (a truth of ModelError.AMassSpreadOverTheBodiesIsTheModelsErrorNotAnAddedMass; seed 11,
+  // used here until the shapes weighed per DOF, is the one seed of six whose spring scatter a
+  // point mass mimics in the shapes: rank 1 there is that mass at 0.72).
   const model::Model nominal = test::Stack();
-  model::Model truth = test::Scattered(nominal, 0.01, 11);
+  model::Model truth = test::Scattered(nominal, 0.01, 12);
   test::SpreadMass(&truth, 1.012);
   DiagnoseConfig config;
   config.options.max_effects = 2;
   std::ostringstream out;
-  const pipeline::DiagnoseStage stage = RunDiagnoseStage(config, nominal, {{"", test::Measured(truth, 11)}}, out);
+  const pipeline::DiagnoseStage stage = RunDiagnoseStage(config, nominal, {{"", test::Measured(truth, 12)}}, out);
   const std::string summary = DiagnosisSummary(stage);
   const diagnose::Candidate& first = stage.diagnosis.candidates.front();
   ASSERT_FALSE(first.noise_consistent) << summary;

@@ -103,20 +103,39 @@ TEST_F(DiagnoseCli, ProbabilitiesAreTheNormalisedEvidence) {
   EXPECT_GE(checked, 2) << "the guideway's near-equal candidates";
 }
 
+double NoneCost(const json& d) {
+  for (const auto& c : d.at("candidates"))
+    if (c.at("kind") == "none") return c.at("cost").get<double>();
+  return -1.0;
+}
+
 TEST_F(DiagnoseCli, ShapeWeightSetsTheShapeSigma) {
   // --shape-weight W means a shape σ of 0.001 / W (documented old form of --shape-sigma): with
   // W = 1 the MAC residuals weigh 10× more than with the default σ 0.01, so the model as given
   // (whose MACs are below 1) costs more.
-  const json base = Diagnose("shape-default", "--max-effects 1");
-  const json heavy = Diagnose("shape-heavy", "--max-effects 1 --shape-weight 1");
+  // Both with --shape-residual mac, the residual the shape σ belongs to.
+  const json base = Diagnose("shape-default", "--max-effects 1 --shape-residual mac");
+  const json heavy = Diagnose("shape-heavy", "--max-effects 1 --shape-residual mac --shape-weight 1");
   EXPECT_DOUBLE_EQ(base.at("options").at("shape_sigma").get<double>(), 0.01);
   EXPECT_DOUBLE_EQ(heavy.at("options").at("shape_sigma").get<double>(), 0.001);
-  auto none_cost = [](const json& d) {
-    for (const auto& c : d.at("candidates"))
-      if (c.at("kind") == "none") return c.at("cost").get<double>();
-    return -1.0;
-  };
-  EXPECT_GT(none_cost(heavy), none_cost(base));
+  EXPECT_EQ(base.at("options").at("shape_residual"), "mac");
+  EXPECT_GT(NoneCost(heavy), NoneCost(base));
+}
+
+TEST_F(DiagnoseCli, ShapeDofSigmaSetsTheFloorOfTheShapeResiduals) {
+  // --shape-dof-sigma S (per-DOF shape residuals, the default): a floor half the default's about doubles
+  // each shape residual of the model as given (whose shapes differ from the test's by more than
+  // the fit's σ), so its cost grows; the options say what was used. An unknown residual is refused.
+  const json base = Diagnose("dof-default", "--max-effects 1");
+  const json tight = Diagnose("dof-tight", "--max-effects 1 --shape-dof-sigma 0.05");
+  EXPECT_EQ(base.at("options").at("shape_residual"), "per-dof");
+  EXPECT_DOUBLE_EQ(base.at("options").at("shape_dof_sigma").get<double>(), 0.1);
+  EXPECT_DOUBLE_EQ(tight.at("options").at("shape_dof_sigma").get<double>(), 0.05);
+  EXPECT_GT(NoneCost(tight), NoneCost(base));
+  const std::string bad = "diagnose \"" + (kSample / "model.toml").string() + "\" --test stud-5um=\"" +
+                          (*run_ / "stud-5um/modes.unv").string() + "\" --shape-residual per_dof";
+  EXPECT_EQ(RunEma(*dir_, bad, "dof-bad.log"), 2);
+  EXPECT_NE(Slurp(*dir_ / "dof-bad.log").find("--shape-residual must be per-dof or mac"), std::string::npos);
 }
 
 TEST_F(DiagnoseCli, ExactFormLeavesTheModelErrorOut) {

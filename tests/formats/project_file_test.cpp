@@ -205,7 +205,7 @@ TEST(ProjectFile, TheDocumentedDefaultsAreTheDefaults) {
   ExpectDefaultOptions(p);
   EXPECT_GE(p.frf_keys.size(), 10u);  // the keys are there, not commented out
   EXPECT_GE(p.fit_keys.size(), 6u);
-  EXPECT_EQ(p.diagnose_keys.size(), 9u);
+  EXPECT_EQ(p.diagnose_keys.size(), 11u);
 }
 
 // Every key into its field, each value other than the default.
@@ -301,6 +301,10 @@ TEST(ProjectFile, OptionKeysAreReadIntoTheirFields) {
   EXPECT_EQ(q.diagnose.max_effects, 1);
   EXPECT_EQ(q.diagnose.criterion, diagnose::Criterion::kAicc);
   EXPECT_EQ(ReadProjectFile(OptionsProject("keys3.toml", "[diagnose]\npairs = true\n")).diagnose.max_effects, 3);
+  const Project shapes = ReadProjectFile(
+      OptionsProject("keys5.toml", "[diagnose]\nshape_residual = \"mac\"\nshape_dof_sigma = 0.2\n"));
+  EXPECT_EQ(shapes.diagnose.shape_residual, diagnose::ShapeResidual::kOneMinusMac);
+  EXPECT_EQ(shapes.diagnose.shape_dof_sigma, 0.2);
   EXPECT_EQ(ReadProjectFile(OptionsProject("keys4.toml", "[frf]\nexp_window = 0\n")).frf.impact.exp_window,
             acquisition::ExpWindowMode::kFixed);  // as --exp-window 0
 }
@@ -340,6 +344,8 @@ TEST(ProjectFile, BadOptionValuesNameTheLineTableAndKey) {
       {"[diagnose]\nmax_effects = 4\n", {"bad.toml:6", "[diagnose] max_effects", "max_effects must be 1, 2 or 3"}},
       {"[diagnose]\nfrequency_floor = -1e-3\n", {"bad.toml:6", "[diagnose] frequency_floor", "frequency_floor must be > 0"}},
       {"[diagnose]\nshape_sigma = 0\n", {"bad.toml:6", "[diagnose] shape_sigma", "shape_sigma must be > 0"}},
+      {"[diagnose]\nshape_residual = \"per_dof\"\n", {"bad.toml:6", "[diagnose] shape_residual: expected mac or per-dof, got 'per_dof'"}},
+      {"[diagnose]\nshape_dof_sigma = 0\n", {"bad.toml:6", "[diagnose] shape_dof_sigma", "shape_dof_sigma must be > 0"}},
       {"[diagnose]\neffect_prior_odds = 2\n", {"bad.toml:6", "[diagnose] effect_prior_odds", "(0, 1]"}},
       {"[diagnose]\nmac_min = -0.1\n", {"bad.toml:6", "[diagnose] mac_min", "mac_min (--mac-min) must lie in [0, 1]"}},
       {"[diagnose]\nexact_form = 1\n", {"bad.toml:6", "[diagnose] exact_form: expected true or false"}},

@@ -49,14 +49,38 @@ std::string CriterionToString(Criterion criterion);
 /// The criterion of a name; false for an unknown name.
 bool StringToCriterion(const std::string& name, Criterion* criterion);
 
+/// How a paired test shape enters the likelihood (docs/diagnose.md "Shapes in the likelihood").
+enum class ShapeResidual {
+  /// One residual per mode, (1 − MAC) / shape_sigma: second order in the shape's difference, so a
+  /// shape that differs by 1 % per DOF weighs 10⁻⁴ — shapes barely count.
+  kOneMinusMac,
+  /// One residual per measured DOF: the unit-normalised test shape minus the model shape scaled to
+  /// it, in units of its σ at that DOF — first order, and the direction of the difference tells a
+  /// point mass from its mirror point, or from scatter spread along the structure.
+  kPerDof,
+};
+inline constexpr EnumName<ShapeResidual> kShapeResidualNames[] = {{ShapeResidual::kOneMinusMac, "mac"},
+                                                                  {ShapeResidual::kPerDof, "per-dof"}};
+/// "mac", "per-dof".
+std::string ShapeResidualToString(ShapeResidual shape_residual);
+/// The shape residual of a name; false for an unknown name.
+bool StringToShapeResidual(const std::string& name, ShapeResidual* shape_residual);
+
 struct DiagnoseOptions {
   /// Relative 1σ floor of a test frequency: a mode's σ is max(its measured σ, floor × f). The
   /// measured σ is the mode's frequency_spread_hz (stabilisation spread from `ema fit`) when the
   /// modes file carries it. 1e-3: what a hammer test repeats to (nothing is gained by fitting
   /// below it).
   double frequency_floor = 1e-3;
-  /// 1σ of (1 − MAC): shapes are measured far less precisely than frequencies.
+  /// 1σ of (1 − MAC): shapes are measured far less precisely than frequencies (the
+  /// kOneMinusMac residual).
   double shape_sigma = 0.01;
+  /// How a paired test shape enters the likelihood (docs/diagnose.md "Shapes in the likelihood").
+  ShapeResidual shape_residual = ShapeResidual::kPerDof;
+  /// kPerDof: the floor of a shape's 1σ at one DOF, relative to the shape's rms amplitude over
+  /// its DOFs (the fit's own σ of |φ| per DOF when larger, and the part of the shape out of phase
+  /// with the rest — a complex test mode — adds to it).
+  double shape_dof_sigma = 0.1;
   /// Residual of a test mode the model cannot pair: relative frequency error 0.5 and MAC 0.
   double unpaired_frequency_residual = 0.5;
   /// Huber threshold on one mode's residual pair, in σ: quadratic below, linear above, so one
@@ -90,7 +114,7 @@ struct DiagnoseOptions {
   /// model's error no longer looks decisive. false: the model's form is taken as exact.
   bool model_error = true;
   double model_error_frequency_min = 1e-5, model_error_frequency_max = 0.3;  ///< ε_f range (share of f)
-  double model_error_shape_min = 1e-4, model_error_shape_max = 1.0;          ///< ε_s range (1 − MAC)
+  double model_error_shape_min = 1e-4, model_error_shape_max = 1.0;          ///< ε_s range (rms shape error of a unit-norm shape; 1 − MAC for kOneMinusMac)
   /// Members of groups (one joint, pad, mount) and single points are candidates too.
   bool members = true;
   /// Screening: grid points of the scan over one parameter's (log) range.

@@ -33,10 +33,10 @@ struct PlanOptions {
   /// The AutoMAC of the chosen set the exchange keeps below (or does not make worse).
   double automac_limit = 0.1;
   /// Expected noise of the test the separations are measured in (the diagnosis's defaults,
-  /// DiagnoseOptions::frequency_floor and shape_sigma): 1σ of a frequency relative to it, and 1σ
-  /// of a shape's 1 − MAC.
+  /// DiagnoseOptions::frequency_floor and shape_dof_sigma): 1σ of a frequency relative to it, and
+  /// 1σ of a shape at one DOF relative to the shape's rms amplitude over the set's DOFs.
   double frequency_sigma_rel = 1e-3;
-  double shape_sigma = 0.01;
+  double shape_dof_sigma = 0.1;
   double sensor_mass_kg = 0.0;  ///< per sensor point, written to the plan (the simulator mounts it)
   int impacts = 5;              ///< impacts per reference and set (averages of H1 and coherence)
 
