@@ -660,11 +660,12 @@ double Uncertainty(const py::handle& h, const std::string& label) {
   return v;
 }
 
-/// A part or part-group name: non-empty, without '/' or '+' (they join targets).
+/// A part or part-group name: non-empty, without '/' or '+' (they join targets), and not '*' (what
+/// "GROUP/*", any member of a group, would hold).
 std::string PartName(const py::handle& h, const std::string& label) {
   const std::string name = Cast<std::string>(h, label, "a name (str)");
-  if (name.empty() || name.find('/') != std::string::npos || name.find('+') != std::string::npos)
-    throw ema::InputError(label, "'" + name + "': expected a non-empty name without '/' or '+'");
+  if (name.empty() || name.find('/') != std::string::npos || name.find('+') != std::string::npos || name == "*")
+    throw ema::InputError(label, "'" + name + "': expected a non-empty name without '/' or '+', and not '*'");
   return name;
 }
 
