@@ -198,14 +198,21 @@ json DiagnosisView(const pipeline::DiagnoseStage& stage) {
   story["noise_consistent"] = f.adequate;
   // Far below 1 the number itself says little: the misfit sits well inside the test's σ, which
   // the frequency floor (0.1 % of f by default) may dominate.
-  story["adequacy"] = f.well_inside_noise ? "Adequate to the test's noise: yes — reduced χ² below 0.01" + over +
-                                                ": the updated model sits well inside the test's σ (each σ at least "
-                                                "the frequency floor, 0.1 % of f by default)."
-                      : f.adequate ? "Adequate to the test's noise: yes — reduced χ² " + Readable(f.reduced_chi2) + over +
-                                         ": what is left is what the measurement noise explains."
-                                   : "Adequate to the test's noise: NO — reduced χ² " + Readable(f.reduced_chi2) + over +
-                                         " (1 would be noise alone): the model still misses something these data can see" +
-                                         (f.effects.empty() ? "" : "; rank 1 is not the whole answer") + ".";
+  // The headline (bold on the page) and the rest as two fields, so that no reader has to find
+  // where one ends in the sentence; `adequacy` is the whole sentence.
+  const std::string headline = f.adequate ? "Adequate to the test's noise: yes" : "Adequate to the test's noise: NO";
+  const std::string detail =
+      f.well_inside_noise ? "reduced χ² below 0.01" + over +
+                                ": the updated model sits well inside the test's σ (each σ at least the frequency "
+                                "floor, 0.1 % of f by default)."
+      : f.adequate
+          ? "reduced χ² " + Readable(f.reduced_chi2) + over + ": what is left is what the measurement noise explains."
+          : "reduced χ² " + Readable(f.reduced_chi2) + over +
+                " (1 would be noise alone): the model still misses something these data can see" +
+                (f.effects.empty() ? "" : "; rank 1 is not the whole answer") + ".";
+  story["adequacy_headline"] = headline;
+  story["adequacy_detail"] = detail;
+  story["adequacy"] = headline + " — " + detail;
   story["reduced_chi2"] = NumberOrNull(f.reduced_chi2);
   // The model's own error the diagnosis inferred (DIAG.json model_error, cli.md turn 4), in words
   // where it dominates the test's σ: the probabilities then compare the readings tried only.

@@ -11,6 +11,7 @@
 
 #include "browser_check.hpp"
 #include "ema/model/effects.hpp"
+#include "embedded_assets.hpp"
 #include "report.hpp"
 #include "words.hpp"
 
@@ -386,6 +387,34 @@ TEST(ReportData, DiagnosisViewFoldsLookAlikesAndTellsTheStory) {
   EXPECT_TRUE(DiagnosisView(pipeline::DiagnoseStage()).empty());
 }
 
+// The adequacy sentence's bold headline and its rest are two fields: the page puts them side by
+// side and looks for no separator in the text (`adequacy` is still the whole sentence).
+TEST(ReportData, AdequacyHeadlineComesApartFromItsDetail) {
+  pipeline::DiagnoseStage stage = LookAlikeDiagnosis();
+  json story = DiagnosisView(stage)["story"];
+  EXPECT_EQ(story["adequacy_headline"], "Adequate to the test's noise: NO");
+  EXPECT_EQ(story["adequacy_detail"],
+            "reduced χ² 3.28 × 10⁴ over 12 test modes (1 would be noise alone): the model still misses something these "
+            "data can see; rank 1 is not the whole answer.");
+  EXPECT_EQ(story["adequacy"].get<std::string>(),
+            story["adequacy_headline"].get<std::string>() + " — " + story["adequacy_detail"].get<std::string>());
+  stage.findings.adequate = true;
+  stage.findings.reduced_chi2 = 0.83;
+  story = DiagnosisView(stage)["story"];
+  EXPECT_EQ(story["adequacy_headline"], "Adequate to the test's noise: yes");
+  EXPECT_EQ(story["adequacy_detail"],
+            "reduced χ² 0.83 over 12 test modes: what is left is what the measurement noise explains.");
+  stage.findings.well_inside_noise = true;
+  story = DiagnosisView(stage)["story"];
+  EXPECT_EQ(story["adequacy_headline"], "Adequate to the test's noise: yes");
+  EXPECT_EQ(story["adequacy_detail"].get<std::string>().rfind("reduced χ² below 0.01 over 12 test modes: ", 0), 0u);
+  // The page's script reads the two fields, and no separator out of the sentence.
+  const std::string script(ReportJs());
+  EXPECT_NE(script.find("story.adequacy_headline"), std::string::npos);
+  EXPECT_EQ(script.find("indexOf(' — ')"), std::string::npos);
+  EXPECT_EQ(script.find("split(' / ')"), std::string::npos);
+}
+
 TEST(ReportData, ParametersInEngineeringUnits) {
   model::Effect hertz = Effect(EffectKind::kSeriesCompliance, EffectTarget::Named("mounts"));
   hertz.law = model::Law(model::HertzLaw{5.72e10, 0.00829, 0.0, std::nullopt, std::nullopt});
@@ -594,7 +623,11 @@ TEST(Report, PageIsSelfContainedAndCarriesTheData) {
   EXPECT_EQ(data["setups"][0]["shapes"]["modes"].size(), 3u);
   ASSERT_EQ(data["setups"][0]["test_mode_table"]["modes"].size(), 3u);
   EXPECT_EQ(data["setups"][0]["test_mode_table"]["modes"][1]["frequency_hz"], 185.0);
-  EXPECT_EQ(data["setups"][0]["rejected"].size(), 1u);
+  ASSERT_EQ(data["setups"][0]["rejected"].size(), 1u);
+  // The impacted DOF is a field of its own: the page's table of rejected impacts reads it, not the
+  // FRF's label.
+  EXPECT_EQ(data["setups"][0]["rejected"][0]["reference"], "1+Z");
+  EXPECT_EQ(data["setups"][0]["rejected"][0]["frf"], "2+Z / 1+Z");
 }
 
 TEST(Report, RendersInHeadlessChromium) {
