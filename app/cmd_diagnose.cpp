@@ -229,9 +229,9 @@ std::string app::DiagnosisSummary(const pipeline::DiagnoseStage& stage) {
       single.effects = {e.effect};
       out << "  " << i + 1 << ". " << diagnose::DescribeCandidate(single) << " — " << Percent(e.probability)
           << " over every candidate that holds it";
-      if (!e.wildcard.empty())
+      if (e.wildcard)
         out << " (" << Percent(e.wildcard_probability) << " for " << model::KindName(e.effect.kind) << " on any of "
-            << e.wildcard << ")";
+            << model::TargetText(*e.wildcard) << ")";
       out << "\n";
       const std::string values = report::EffectValuesWords(e);
       if (!values.empty()) out << "     " << values << "\n";

@@ -18,6 +18,8 @@
 #include "ema/model/effects.hpp"
 #include "ema/model/solve.hpp"
 
+using ema::model::EffectTarget;
+
 namespace {
 
 using namespace ema;
@@ -92,7 +94,8 @@ bool RanksTruthFirst(const diagnose::Diagnosis& d, const std::vector<model::Effe
 
 void BM_Diagnose3Bodies20Springs12Modes(benchmark::State& state) {
   const model::Model nominal = ThreeBodies();
-  model::Effect truth{model::EffectKind::kSeriesCompliance, "bearings", {}, model::Law(model::LinearLaw{8e6}), 0};
+  model::Effect truth{
+      model::EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), {}, model::Law(model::LinearLaw{8e6}), 0};
   ModeSet test = model::Solve(model::ApplyEffect(nominal, truth)).modes;
   test.modes.resize(12);
   std::mt19937 rng(3);
@@ -164,30 +167,44 @@ void BM_AcceptanceTwoEffects(benchmark::State& state) {
   const fs::path p = Scratch() / "stack.toml";
   test_chain::Write(p, test_chain::StackToml());
   RunCase(state, p,
-          {{model::EffectKind::kSeriesCompliance, "joints", {}, model::Law(model::LinearLaw{1.2e7}), 0},
-           {model::EffectKind::kStiffnessScale, "mounts", {{"factor", 0.6}}, std::nullopt, 0}});
+          {{model::EffectKind::kSeriesCompliance,
+            EffectTarget::Named("joints"),
+            {},
+            model::Law(model::LinearLaw{1.2e7}),
+            0},
+           {model::EffectKind::kStiffnessScale, EffectTarget::Named("mounts"), {{"factor", 0.6}}, std::nullopt, 0}});
 }
 BENCHMARK(BM_AcceptanceTwoEffects)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 void BM_AcceptanceOneMemberOfFour(benchmark::State& state) {
   const fs::path p = Scratch() / "stack.toml";
   test_chain::Write(p, test_chain::StackToml());
-  RunCase(state, p, {{model::EffectKind::kStiffnessScale, "joints/J3", {{"factor", 0.2}}, std::nullopt, 0}});
+  RunCase(state, p,
+          {{model::EffectKind::kStiffnessScale,
+            EffectTarget::MemberOf("joints", "J3"),
+            {{"factor", 0.2}},
+            std::nullopt,
+            0}});
 }
 BENCHMARK(BM_AcceptanceOneMemberOfFour)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 void BM_AcceptanceFeSupport(benchmark::State& state) {
   test_chain::WriteBeam(Scratch() / "beam");
   RunCase(state, Scratch() / "beam" / "beam.toml",
-          {{model::EffectKind::kStiffnessScale, "supports/S2", {{"factor", 0.25}}, std::nullopt, 0}});
+          {{model::EffectKind::kStiffnessScale,
+            EffectTarget::MemberOf("supports", "S2"),
+            {{"factor", 0.25}},
+            std::nullopt,
+            0}});
 }
 BENCHMARK(BM_AcceptanceFeSupport)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 void BM_AcceptanceAirGap(benchmark::State& state) {
   test_chain::Write(Scratch() / "films" / "lateral.csv", test_chain::FilmArrays(false, true));
   test_chain::Write(Scratch() / "films" / "films.toml", test_chain::ModelToml("bearings", "lateral.csv"));
-  RunCase(state, Scratch() / "films" / "films.toml",
-          {{model::EffectKind::kOperatingPoint, "bearings", {{"value", 7.5e-6}}, std::nullopt, 0}});
+  RunCase(
+      state, Scratch() / "films" / "films.toml",
+      {{model::EffectKind::kOperatingPoint, EffectTarget::Named("bearings"), {{"value", 7.5e-6}}, std::nullopt, 0}});
 }
 BENCHMARK(BM_AcceptanceAirGap)->Unit(benchmark::kMillisecond)->Iterations(1);
 

@@ -17,6 +17,8 @@
 #include "ema/model/solve.hpp"
 #include "model/fe_frame.hpp"
 
+using ema::model::EffectTarget;
+
 namespace {
 
 using namespace ema;
@@ -54,8 +56,11 @@ void RunFrame(benchmark::State& state, int segments, int zones, bool model_error
   const fs::path dir = fs::temp_directory_path() / ("ema-bench-frame-" + std::to_string(segments));
   const testing::FrameFiles files = testing::WriteFrame(dir, spec);
   const model::Model nominal = formats::ReadModelFile(files.model);
-  const model::Model truth =
-      model::ApplyEffect(nominal, {model::EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.4}}, std::nullopt, 0});
+  const model::Model truth = model::ApplyEffect(nominal, {model::EffectKind::kStiffnessScale,
+                                                          EffectTarget::MemberOf("girders", "G3"),
+                                                          {{"factor", 0.4}},
+                                                          std::nullopt,
+                                                          0});
   const ModeSet test = VerticalModes(truth, 6, 1e-3, 7);
   diagnose::Diagnosis d;
   diagnose::DiagnoseOptions options;
@@ -69,7 +74,8 @@ void RunFrame(benchmark::State& state, int segments, int zones, bool model_error
   state.counters["parts"] = files.parts;
   state.counters["full_solves"] = d.model_solves;
   state.counters["peak_rss_MB"] = usage.ru_maxrss / 1024.0;
-  state.counters["rank1_right"] = first.target == "girders/G3" && first.effects.size() == 1;
+  state.counters["rank1_right"] =
+      first.effects.size() == 1 && first.effects[0].target == ema::model::EffectTarget::MemberOf("girders", "G3");
   state.counters["factor"] = first.parameters.empty() ? 0.0 : first.parameters[0].value;
   fs::remove_all(dir);
 }
@@ -99,8 +105,11 @@ void RunFootbridge(benchmark::State& state, bool geometry) {
   const testing::FrameFiles files = testing::WriteFrame(dir, spec);
   model::Model nominal = formats::ReadModelFile(files.model);
   if (!geometry) nominal.fe.node_positions.clear();
-  model::Model truth =
-      model::ApplyEffect(nominal, {model::EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.6}}, std::nullopt, 0});
+  model::Model truth = model::ApplyEffect(nominal, {model::EffectKind::kStiffnessScale,
+                                                    EffectTarget::MemberOf("girders", "G3"),
+                                                    {{"factor", 0.6}},
+                                                    std::nullopt,
+                                                    0});
   std::mt19937 rng(37);
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (model::FePart& part : truth.fe.parts) part.stiffness_factor *= std::exp(0.03 * gauss(rng));
@@ -120,7 +129,8 @@ void RunFootbridge(benchmark::State& state, bool geometry) {
   state.counters["test_dofs"] = static_cast<double>(test.dofs.size());
   state.counters["full_solves"] = d.model_solves;
   state.counters["peak_rss_MB"] = usage.ru_maxrss / 1024.0;
-  state.counters["rank1_right"] = first.target == "girders/G3" && first.effects.size() == 1;
+  state.counters["rank1_right"] =
+      first.effects.size() == 1 && first.effects[0].target == ema::model::EffectTarget::MemberOf("girders", "G3");
   state.counters["rank1_probability"] = first.probability;
   fs::remove_all(dir);
 }

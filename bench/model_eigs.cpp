@@ -8,6 +8,8 @@
 #include "ema/model/effects.hpp"
 #include "ema/model/solve.hpp"
 
+using ema::model::EffectTarget;
+
 namespace {
 
 ema::model::Model Lattice(int side) {
@@ -63,8 +65,11 @@ void BM_SparseFirst20Modes(benchmark::State& state) {
 void BM_CarriageSolveWithEffect(benchmark::State& state) {
   const ema::model::Model model =
       ema::formats::ReadModelFile(std::string(EMA_SOURCE_DIR) + "/tests/model/data/carriage.toml");
-  const ema::model::Effect effect{ema::model::EffectKind::kSeriesCompliance, "bearings", {},
-                                  ema::model::Law(ema::model::LinearLaw{2e7}), 0};
+  const ema::model::Effect effect{ema::model::EffectKind::kSeriesCompliance,
+                                  EffectTarget::Named("bearings"),
+                                  {},
+                                  ema::model::Law(ema::model::LinearLaw{2e7}),
+                                  0};
   ema::model::SolveOptions options;
   options.setup = "stud-5um";
   for (auto _ : state) {

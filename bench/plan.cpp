@@ -26,9 +26,10 @@ void BM_Plan1200Dofs198PointsTenReadings(benchmark::State& state) {
   const model::Model m = formats::ReadModelFile(files.model);
   std::vector<planning::Reading> readings;
   for (int i : {10, 90, 20, 80, 30, 70, 40, 60, 45, 55}) {
-    const std::string target = "points:" + std::to_string(1000 + i);
-    readings.push_back(
-        {"added_mass on " + target, {{model::EffectKind::kAddedMass, target, {{"mass", 40.0}}, std::nullopt, 0}}, ""});
+    const model::EffectTarget target = model::EffectTarget::Points({1000 + i});
+    readings.push_back({"added_mass on " + model::TargetText(target),
+                        {{model::EffectKind::kAddedMass, target, {{"mass", 40.0}}, std::nullopt, 0}},
+                        ""});
   }
   planning::PlanOptions o;
   o.sensors_per_set = 10, o.sets = 2, o.triaxial = true, o.references = 2;

@@ -58,10 +58,32 @@ ema::model::EffectKind Kind(Gen& g) {
 // A candidate group's label: a kind's name or any text.
 std::string KindLabel(Gen& g) { return g.Bool() ? ema::model::KindName(Kind(g)) : g.Text(); }
 
+// A target of any form with any names (the bytes need not be UTF-8) and ids.
+ema::model::EffectTarget MakeTarget(Gen& g) {
+  using ema::model::EffectTarget;
+  switch (g.Int(0, 5)) {
+    case 0:
+      return EffectTarget::MemberOf(g.Text(), g.Text());
+    case 1:
+      return EffectTarget::EveryMemberOf(g.Text());
+    case 2:
+      return EffectTarget::AllPoints();
+    case 3: {
+      std::vector<int> ids(g.Count(4));
+      for (int& id : ids) id = g.AnyInt();
+      return EffectTarget::Points(std::move(ids));
+    }
+    case 4:
+      return EffectTarget::EveryPoint();
+    default:
+      return EffectTarget::Named(g.Text());
+  }
+}
+
 ema::model::Effect MakeEffect(Gen& g) {
   ema::model::Effect e;
   e.kind = Kind(g);
-  e.target = g.Text();
+  e.target = MakeTarget(g);
   for (std::size_t n = g.Count(4); n > 0; --n) e.parameters[g.Text()] = g.Double();
   if (g.Bool()) e.law = MakeLaw(g, 2);
   e.line = g.AnyInt();
@@ -90,7 +112,7 @@ ema::diagnose::Candidate MakeCandidate(Gen& g) {
   c.parameters.resize(g.Count(5));
   for (auto& p : c.parameters) {
     p.effect_kind = Kind(g);
-    p.target = g.Text();
+    p.target = MakeTarget(g);
     p.name = g.Text();
     p.value = g.Double();
     p.sigma = g.Double();
@@ -136,7 +158,7 @@ ema::diagnose::Diagnosis MakeDiagnosis(Gen& g) {
   d.steps.resize(g.Count(5));
   for (auto& s : d.steps) s = {g.Text(), g.Double(), g.Double(), g.Double()};
   d.effect_probabilities.resize(g.Count(6));
-  for (auto& e : d.effect_probabilities) e = {Kind(g), g.Text(), g.Double()};
+  for (auto& e : d.effect_probabilities) e = {Kind(g), MakeTarget(g), g.Double()};
   d.groups.resize(g.Count(4));
   for (auto& gr : d.groups) {
     gr.kind = KindLabel(g);
@@ -346,13 +368,13 @@ ema::pipeline::Findings MakeFindings(Gen& g) {
     e.parameters.resize(g.Count(4));
     for (auto& p : e.parameters) {
       p.effect_kind = Kind(g);
-      p.target = g.Text();
+      p.target = MakeTarget(g);
       p.name = g.Text();
       p.value = g.Double();
       p.sigma = g.Double();
     }
     e.probability = g.Double();
-    if (g.Bool()) e.wildcard = g.Text();
+    if (g.Bool()) e.wildcard = MakeTarget(g);
     e.wildcard_probability = g.Double();
     e.springs.resize(g.Count(6));
     for (auto& sp : e.springs) sp = {g.Text(), g.Double(), g.Double()};

@@ -403,33 +403,6 @@ ModeSet ModeSetFromArrays(const py::dict& d, const std::string& label) {
   return set;
 }
 
-/// A file that is removed when it goes out of scope.
-struct TemporaryFile {
-  std::filesystem::path path;
-  explicit TemporaryFile(const std::string& text) {
-    std::string name = (std::filesystem::temp_directory_path() / "ema-modes-XXXXXX").string();
-    const int fd = mkstemp(name.data());
-    if (fd < 0) throw std::runtime_error("cannot create a temporary file in " + std::filesystem::temp_directory_path().string());
-    close(fd);
-    path = name;
-    std::ofstream out(path, std::ios::binary);
-    out << text;
-    if (!out.flush()) throw std::runtime_error("cannot write the temporary file " + name);
-  }
-  ~TemporaryFile() {
-    std::error_code ec;
-    std::filesystem::remove(path, ec);
-  }
-  TemporaryFile(const TemporaryFile&) = delete;
-  TemporaryFile& operator=(const TemporaryFile&) = delete;
-};
-
-std::string ReplaceAll(std::string text, const std::string& from, const std::string& to) {
-  for (size_t at = text.find(from); !from.empty() && at != std::string::npos; at = text.find(from, at + to.size()))
-    text.replace(at, from.size(), to);
-  return text;
-}
-
 /// A dict as strict JSON text (numpy numbers and arrays as plain numbers and lists); InputError
 /// naming `label` and `layout` (the layout expected) for what JSON cannot hold.
 std::string JsonText(const py::handle& d, const std::string& label, const std::string& layout) {
@@ -455,14 +428,7 @@ std::string JsonText(const py::handle& d, const std::string& label, const std::s
 ModeSet ModeSetFromJsonLayout(const py::handle& d, const std::string& label, std::vector<std::vector<int>>* roving_sets,
                               Dof* reference) {
   const std::string text = JsonText(d, label, "`ema fit --json`'s layout");
-  const TemporaryFile file(text);
-  ModeSet set;
-  try {
-    set = ema::formats::ReadModeSet(file.path);
-  } catch (const ema::InputError& e) {
-    throw ema::InputError(ReplaceAll(e.what(), file.path.string(), label));
-  }
-  set.source = label;
+  ModeSet set = ema::formats::ReadModeSetJsonText(text, label);  // its messages name `label`
   if (roving_sets && reference) ema::formats::ReadTestSets(nlohmann::json::parse(text), roving_sets, reference);
   return set;
 }
@@ -660,11 +626,12 @@ double Uncertainty(const py::handle& h, const std::string& label) {
   return v;
 }
 
-/// A part or part-group name: non-empty, without '/' or '+' (they join targets).
+/// A part or part-group name: non-empty, without '/' or '+' (they join targets), and not '*' (what
+/// "GROUP/*", any member of a group, would hold).
 std::string PartName(const py::handle& h, const std::string& label) {
   const std::string name = Cast<std::string>(h, label, "a name (str)");
-  if (name.empty() || name.find('/') != std::string::npos || name.find('+') != std::string::npos)
-    throw ema::InputError(label, "'" + name + "': expected a non-empty name without '/' or '+'");
+  if (name.empty() || name.find('/') != std::string::npos || name.find('+') != std::string::npos || name == "*")
+    throw ema::InputError(label, "'" + name + "': expected a non-empty name without '/' or '+', and not '*'");
   return name;
 }
 

@@ -93,13 +93,7 @@ PickSession::PickSession(FitConfig config, FrfSet frfs, PickOptions options)
   if (config_.options.method != curvefit::FitMethod::kPolymax)
     throw UsageError("ema pick needs --method polymax: picking is done on the stabilisation diagram");
   const std::vector<double>& first = config_.options.select_frequencies_hz;
-  try {
-    pick_ = FitPick(first.empty(), first);
-  } catch (const InputError& e) {
-    // As RunFitStage: the message names the FRF file.
-    if (e.Where().rfind(config_.input, 0) == 0) throw;  // already placed in the FRFs (a record, a line)
-    throw InputError(config_.input, e.what());
-  }
+  pick_ = FitPick(first.empty(), first);  // curvefit::Fit's errors name the FRF file
   diagram_ = pick_.fit->diagram;
   for (const auto& w : pick_.fit->warnings) std::cerr << "warning: " << w << "\n";
   display_lines_ = DisplayLines(frfs_, diagram_.band_lo_hz, diagram_.band_hi_hz, options_.max_display_lines);

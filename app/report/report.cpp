@@ -255,8 +255,11 @@ json BuildReportData(const ReportInput& input) {
         if (!frf.contains("rejected") || !frf["rejected"].is_array()) continue;
         for (const json& r : frf["rejected"]) {
           json entry = r;
+          const std::string reference =
+              std::to_string(frf.value("reference_node", 0)) + frf.value("reference_dir", std::string());
           entry["frf"] = std::to_string(frf.value("response_node", 0)) + frf.value("response_dir", std::string()) +
-                         " / " + std::to_string(frf.value("reference_node", 0)) + frf.value("reference_dir", std::string());
+                         " / " + reference;
+          entry["reference"] = reference;  // the impacted DOF, for the page's table (no label parsed back)
           rejected.push_back(std::move(entry));
         }
       }

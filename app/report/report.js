@@ -171,11 +171,10 @@
       st.appendChild(el('p', { 'class': 'errline', text: 'Mean frequency error ' + num(story.error_before_pct) + ' % → ' +
         num(story.error_after_pct) + ' %, mean MAC ' + fmt(story.mac_before, 3) + ' → ' + fmt(story.mac_after, 3) +
         ' (the model as given → with rank 1).' }));
-      var ad = String(story.adequacy || '');
-      var cut = ad.indexOf(' — ');
       var adequacy = el('div', { 'class': 'adequacy ' + (story.noise_consistent === true ? 'ok' :
         story.noise_consistent === false ? 'bad' : 'unknown'), id: 'adequacy' },
-        [el('strong', { text: cut > 0 ? ad.slice(0, cut) : ad }), cut > 0 ? ad.slice(cut) : '']);
+        [el('strong', { text: story.adequacy_headline || '' }),
+          story.adequacy_detail ? ' — ' + story.adequacy_detail : '']);
       if (story.noise_consistent === false && story.failing_modes && story.failing_modes.length) {
         adequacy.appendChild(el('div', { 'class': 'failing', text: 'Where: ' + story.failing_modes.slice(0, 4).join('; ') +
           (story.failing_modes.length > 4 ? '; and ' + (story.failing_modes.length - 4) + ' more' : '') +
@@ -618,7 +617,7 @@
       var byImpact = {};
       var order = [];
       setup.rejected.forEach(function (r) {
-        var ref = String(r.frf).split(' / ')[1] || '';
+        var ref = r.reference || '';
         var key = ref + '|' + r.impact + '|' + r.reason;
         if (!byImpact[key]) { byImpact[key] = { ref: ref, impact: r.impact, reason: r.reason, n: 0 }; order.push(key); }
         byImpact[key].n += 1;

@@ -130,13 +130,13 @@ json DiagnosedPlaces(const model::Model& m, const std::vector<model::Effect>& ef
     json points = json::array();
     auto add = [&](const Eigen::Vector3d& p) { points.push_back({p.x(), p.y(), p.z()}); };
     Eigen::Vector3d p;
-    if (info.target == model::EffectTarget::kSprings) {
+    if (info.acts_on == model::ActsOn::kSprings) {
       for (int i : model::TargetSprings(m, e.target)) {
         const model::Spring& s = m.springs[static_cast<std::size_t>(i)];
         if (Place(m, s.a, nullptr, &p)) add(p);
         if (!s.b.IsGround() && Place(m, s.b, &s.a, &p)) add(p);
       }
-    } else if (info.target == model::EffectTarget::kPoints) {
+    } else if (info.acts_on == model::ActsOn::kPoints) {
       std::vector<int> named;
       try {
         named = model::TargetPoints(m, e);
@@ -145,16 +145,19 @@ json DiagnosedPlaces(const model::Model& m, const std::vector<model::Effect>& ef
       }
       for (int i : named)
         if (Place(m, m.points[static_cast<std::size_t>(i)].where, nullptr, &p)) add(p);
-    } else if (const model::Body* b = m.FindBody(e.target)) {
+    } else if (const model::Body* b = model::TargetBody(m, e.target)) {
       add(b->centre);
     }
     // A member is labelled by its own name ("J3" of "joints/J3").
-    std::string label = e.target;
+    std::string label = model::TargetText(e.target);
     for (const model::Member& member : model::Members(m))
       if (member.Target() == e.target) label = member.name;
     for (const model::FePart& part : m.fe.parts)
-      if (!part.group.empty() && part.group + "/" + part.name == e.target) label = part.name;
-    out.push_back({{"target", e.target}, {"kind", model::KindName(e.kind)}, {"label", label}, {"points", points}});
+      if (!part.group.empty() && part.Target() == e.target) label = part.name;
+    out.push_back({{"target", model::TargetText(e.target)},
+                   {"kind", model::KindName(e.kind)},
+                   {"label", label},
+                   {"points", points}});
   }
   return out;
 }
@@ -177,11 +180,12 @@ json DiagnosisView(const pipeline::DiagnoseStage& stage) {
     diagnose::Candidate single;
     single.effects = {e.effect};
     json j = {{"kind", model::KindName(e.effect.kind)},
-              {"target", e.effect.target},
+              {"target", model::TargetText(e.effect.target)},
               {"description", diagnose::DescribeCandidate(single, false)},
               {"values", EffectValuesWords(e)},
               {"probability", NumberOrNull(e.probability)}};
-    if (!e.wildcard.empty()) j["any"] = {{"target", e.wildcard}, {"probability", NumberOrNull(e.wildcard_probability)}};
+    if (e.wildcard)
+      j["any"] = {{"target", model::TargetText(*e.wildcard)}, {"probability", NumberOrNull(e.wildcard_probability)}};
     story_effects.push_back(std::move(j));
   }
   story["effects"] = story_effects;
@@ -194,14 +198,21 @@ json DiagnosisView(const pipeline::DiagnoseStage& stage) {
   story["noise_consistent"] = f.adequate;
   // Far below 1 the number itself says little: the misfit sits well inside the test's σ, which
   // the frequency floor (0.1 % of f by default) may dominate.
-  story["adequacy"] = f.well_inside_noise ? "Adequate to the test's noise: yes — reduced χ² below 0.01" + over +
-                                                ": the updated model sits well inside the test's σ (each σ at least "
-                                                "the frequency floor, 0.1 % of f by default)."
-                      : f.adequate ? "Adequate to the test's noise: yes — reduced χ² " + Readable(f.reduced_chi2) + over +
-                                         ": what is left is what the measurement noise explains."
-                                   : "Adequate to the test's noise: NO — reduced χ² " + Readable(f.reduced_chi2) + over +
-                                         " (1 would be noise alone): the model still misses something these data can see" +
-                                         (f.effects.empty() ? "" : "; rank 1 is not the whole answer") + ".";
+  // The headline (bold on the page) and the rest as two fields, so that no reader has to find
+  // where one ends in the sentence; `adequacy` is the whole sentence.
+  const std::string headline = f.adequate ? "Adequate to the test's noise: yes" : "Adequate to the test's noise: NO";
+  const std::string detail =
+      f.well_inside_noise ? "reduced χ² below 0.01" + over +
+                                ": the updated model sits well inside the test's σ (each σ at least the frequency "
+                                "floor, 0.1 % of f by default)."
+      : f.adequate
+          ? "reduced χ² " + Readable(f.reduced_chi2) + over + ": what is left is what the measurement noise explains."
+          : "reduced χ² " + Readable(f.reduced_chi2) + over +
+                " (1 would be noise alone): the model still misses something these data can see" +
+                (f.effects.empty() ? "" : "; rank 1 is not the whole answer") + ".";
+  story["adequacy_headline"] = headline;
+  story["adequacy_detail"] = detail;
+  story["adequacy"] = headline + " — " + detail;
   story["reduced_chi2"] = NumberOrNull(f.reduced_chi2);
   // The model's own error the diagnosis inferred (DIAG.json model_error, cli.md turn 4), in words
   // where it dominates the test's σ: the probabilities then compare the readings tried only.

@@ -75,7 +75,7 @@ std::string EffectValuesWords(const pipeline::EffectFinding& f) {
     if (std::isfinite(s.element_n_per_m))
       element += (element.empty() ? "" : ", ") + Significant(s.element_n_per_m / 1e6) + " N/µm" + at;
   }
-  std::string springs = "per spring of '" + f.effect.target + "' now: " + whole;
+  std::string springs = "per spring of '" + model::TargetText(f.effect.target) + "' now: " + whole;
   if (!element.empty()) springs += " (the element in series alone: " + element + ")";
   return out + (out.empty() ? "" : "; ") + springs;
 }

@@ -308,12 +308,14 @@ Eigen::VectorXcd SynthesiseFrf(const ModalModel& model, int output, int referenc
   return h;
 }
 
-FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& source,
-              const ProgressCallback& progress) {
+namespace {
+
+// Fit after PrepareFitData: its stages throw InputErrors that name the stage ("polymax", "lsfd",
+// "--select"), which Fit places at the input.
+FitResult FitPreparedData(const FitData& data, const FitOptions& options, const std::string& source,
+                          const ProgressCallback& progress, std::chrono::steady_clock::time_point t0) {
   using Clock = std::chrono::steady_clock;
-  const auto t0 = Clock::now();
   FitResult result;
-  const FitData data = PrepareFitData(frfs, options.data, source);
   result.transposed = data.transposed;
   // After the poles ("poles", 0..1): the refinement's iterations and a step before each LSFD, below 1
   // until the fit is done (a bar ends its line at 1). Every step is also where a progress callback
@@ -443,6 +445,19 @@ FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& 
   result.modes.source = source;
   result.timing.total = std::chrono::duration<double>(Clock::now() - t0).count();
   return result;
+}
+
+}  // namespace
+
+FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& source,
+              const ProgressCallback& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const FitData data = PrepareFitData(frfs, options.data, source);  // its errors name `source` already
+  try {
+    return FitPreparedData(data, options, source, progress, t0);
+  } catch (const InputError& e) {
+    throw InputError(source, e.what());  // "FRF.unv: polymax: ...": every error of the fit names its input
+  }
 }
 
 }  // namespace ema::curvefit

@@ -60,7 +60,8 @@ bool CarriesFilmLoad(const model::Model& m, const std::vector<int>& springs) {
 }
 
 struct SpringSet {
-  std::string target, group;
+  model::EffectTarget target;
+  std::string group;
   std::vector<int> springs;
   bool member = false;
 };
@@ -71,17 +72,25 @@ double PriorSigma(const model::Model& m, EffectKind kind, double item_sigma) {
   return it != m.priors.end() ? it->second : model::Info(kind).prior_sigma;
 }
 
-Atom MakeAtom(const model::Model& m, EffectKind kind, const std::string& target, double ref, double item_sigma) {
+Atom MakeAtom(const model::Model& m, EffectKind kind, const model::EffectTarget& target, double ref,
+              double item_sigma) {
+  using Form = model::EffectTarget::Form;
   const model::EffectKindInfo& info = model::Info(kind);
   Atom a;
   a.info = &info;
   a.effect = model::Effect{kind, target, {}, std::nullopt, 0};
-  const auto slash = target.find('/');
-  if (info.target == model::EffectTarget::kPoints) a.words = target == "all_points" ? "all points" : "point " + target.substr(7);
-  else if (info.target == model::EffectTarget::kBody) a.words = "body '" + target + "'";
-  else if (slash != std::string::npos)
-    a.words = "member '" + target.substr(slash + 1) + "' of group '" + target.substr(0, slash) + "'";
-  else a.words = "group '" + target + "'";
+  if (target.form == Form::kAllPoints) {
+    a.words = "all points";
+  } else if (target.form == Form::kPoints) {
+    a.words = "point";
+    for (size_t i = 0; i < target.points.size(); ++i) a.words += (i ? "," : " ") + std::to_string(target.points[i]);
+  } else if (info.acts_on == model::ActsOn::kBody) {
+    a.words = "body '" + model::TargetText(target) + "'";
+  } else if (target.form == Form::kMember) {
+    a.words = "member '" + target.member + "' of group '" + target.name + "'";
+  } else {
+    a.words = "group '" + model::TargetText(target) + "'";
+  }
   a.spec = {info.parameter, ref, 1.0, true, std::log(info.range_low), std::log(info.range_high), info.absent_end};
   a.prior.shape = info.prior_shape;
   a.prior.sigma = PriorSigma(m, kind, item_sigma);
@@ -164,7 +173,7 @@ model::Effect Atom::With(double theta) const {
 }
 
 std::string Atom::Label() const {
-  return model::KindName(effect.kind) + (hertz ? " (hertz)" : "") + " of '" + effect.target + "'";
+  return model::KindName(effect.kind) + (hertz ? " (hertz)" : "") + " of '" + model::TargetText(effect.target) + "'";
 }
 
 std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& options) {
@@ -186,7 +195,8 @@ std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& op
     if (std::find(groups.begin(), groups.end(), s.group) == groups.end()) groups.push_back(s.group);
   const std::vector<model::Member> members = model::Members(base);
   for (const std::string& g : groups) {
-    sets.push_back({g, g, model::TargetSprings(base, g), false});
+    const model::EffectTarget group = model::EffectTarget::Named(g);
+    sets.push_back({group, g, model::TargetSprings(base, group), false});
     std::vector<const model::Member*> of_group;
     for (const auto& mem : members)
       if (mem.group == g) of_group.push_back(&mem);
@@ -255,7 +265,7 @@ std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& op
       const std::string t = p.group.empty() ? p.name : p.group;
       if (std::find(part_targets.begin(), part_targets.end(), t) == part_targets.end()) part_targets.push_back(t);
     }
-    auto add_part_atoms = [&](const std::string& target, const std::string& group, bool member) {
+    auto add_part_atoms = [&](const model::EffectTarget& target, const std::string& group, bool member) {
       double sigma = kNaN;
       bool stiffness = false, mass = false;
       for (int i : model::TargetParts(base, target)) {
@@ -264,12 +274,12 @@ std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& op
         stiffness |= p.HasStiffness();
         mass |= p.HasMass();
       }
-      const auto slash = target.find('/');
-      const std::string words = slash != std::string::npos
-                                    ? "member '" + target.substr(slash + 1) + "' of part group '" + group + "'"
-                                    : (parts[static_cast<size_t>(model::TargetParts(base, target).front())].group.empty()
-                                           ? "part '" + target + "'"
-                                           : "part group '" + target + "'");
+      const std::string words =
+          target.form == model::EffectTarget::Form::kMember
+              ? "member '" + target.member + "' of part group '" + group + "'"
+              : (parts[static_cast<size_t>(model::TargetParts(base, target).front())].group.empty()
+                     ? "part '" + target.name + "'"
+                     : "part group '" + target.name + "'");
       if (stiffness) {
         Atom a = MakeAtom(base, EffectKind::kStiffnessScale, target, 1.0, sigma);
         a.words = words;
@@ -287,8 +297,8 @@ std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& op
       }
     };
     for (const std::string& t : part_targets) {
-      add_part_atoms(t, t, false);
-      const std::vector<int> of_group = model::TargetParts(base, t);
+      add_part_atoms(model::EffectTarget::Named(t), t, false);
+      const std::vector<int> of_group = model::TargetParts(base, model::EffectTarget::Named(t));
       if (options.members && of_group.size() >= 2 && !parts[static_cast<size_t>(of_group.front())].group.empty())
         for (int i : of_group) add_part_atoms(parts[static_cast<size_t>(i)].Target(), t, true);
     }
@@ -296,18 +306,20 @@ std::vector<Atom> BuildAtoms(const model::Model& base, const DiagnoseOptions& op
   // Points: all together, then (with members) one by one.
   if (!base.points.empty()) {
     const double per_point = TotalMass(base) / base.points.size();
-    atoms.push_back(MakeAtom(base, EffectKind::kAddedMass, "all_points", per_point, kNaN));
+    atoms.push_back(MakeAtom(base, EffectKind::kAddedMass, model::EffectTarget::AllPoints(), per_point, kNaN));
     if (options.members && base.points.size() >= 2)
       for (const auto& p : base.points) {
-        Atom a = MakeAtom(base, EffectKind::kAddedMass, "points:" + std::to_string(p.id), per_point, kNaN);
+        Atom a = MakeAtom(base, EffectKind::kAddedMass, model::EffectTarget::Points({p.id}), per_point, kNaN);
         a.member = true;
         atoms.push_back(a);
       }
   }
   // Bodies.
-  for (const auto& b : base.bodies) atoms.push_back(MakeAtom(base, EffectKind::kMassScale, b.name, 1.0, b.uncertainty));
   for (const auto& b : base.bodies)
-    atoms.push_back(MakeAtom(base, EffectKind::kGroundSpring, b.name, 0.1 * k_mean_all, kNaN));
+    atoms.push_back(MakeAtom(base, EffectKind::kMassScale, model::EffectTarget::Named(b.name), 1.0, b.uncertainty));
+  for (const auto& b : base.bodies)
+    atoms.push_back(
+        MakeAtom(base, EffectKind::kGroundSpring, model::EffectTarget::Named(b.name), 0.1 * k_mean_all, kNaN));
   // Stiffnesses fail grossly (a loose bolt, a cracked weld, rubber for a rated mount); masses are
   // weighed. Only stiffness factors carry the fault tail.
   for (Atom& a : atoms)

@@ -201,7 +201,7 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
   for (const auto& e : effects)
     if (!((e.kind == model::EffectKind::kStiffnessScale || e.kind == model::EffectKind::kMassScale) &&
           model::TargetSprings(r.skeleton, e.target).empty() &&
-          !r.skeleton.FindBody(e.target) && !model::TargetParts(r.skeleton, e.target).empty()))
+          !model::TargetBody(r.skeleton, e.target) && !model::TargetParts(r.skeleton, e.target).empty()))
       rest_changed = true;
   return Compare([&](std::size_t s, const std::vector<model::PointMass>& sensors) {
     model::SolveOptions so;

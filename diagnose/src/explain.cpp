@@ -21,17 +21,24 @@ std::string CandidateLabel(const Candidate& c) {
   for (const model::Effect& e : c.effects) {
     std::string label = model::KindName(e.kind);
     if (e.kind == model::EffectKind::kSeriesCompliance && e.law) label += " (" + e.law->KindName() + ")";
-    parts.push_back(label + " of '" + e.target + "'");
+    parts.push_back(label + " of '" + model::TargetText(e.target) + "'");
   }
   return Join(parts, " + ");
 }
 
-// "group 'joints'", "member 'J3' of group 'joints'", "points 101", "body 'top'".
-std::string Where(const std::string& target) {
-  const auto slash = target.find('/');
-  if (slash != std::string::npos)
-    return "member '" + target.substr(slash + 1) + "' of group '" + target.substr(0, slash) + "'";
-  return "group '" + target + "'";
+// "group 'joints'", "member 'J3' of group 'joints'".
+std::string Where(const model::EffectTarget& target) {
+  if (target.form == model::EffectTarget::Form::kMember)
+    return "member '" + target.member + "' of group '" + target.name + "'";
+  return "group '" + model::TargetText(target) + "'";
+}
+
+// "101" or "101,102": the ids of a points target ("all_points" for all of them).
+std::string PointWords(const model::EffectTarget& target) {
+  if (target.form != model::EffectTarget::Form::kPoints) return model::TargetText(target);
+  std::string ids;
+  for (int id : target.points) ids += (ids.empty() ? "" : ",") + std::to_string(id);
+  return "point " + ids;
 }
 
 // True when one candidate's effects (kind and target) all appear in the other's.
@@ -117,7 +124,7 @@ Candidate MakeCandidate(Problem* p, const Fit& f, double baseline_cost) {
   std::vector<std::string> kinds, targets;
   for (int a : f.atoms) {
     kinds.push_back(model::KindName(atoms[a].effect.kind));
-    targets.push_back(atoms[a].effect.target);
+    targets.push_back(model::TargetText(atoms[a].effect.target));
   }
   c.kind = f.atoms.empty() ? "none" : Join(kinds, "+");
   c.target = Join(targets, "+");
@@ -286,7 +293,7 @@ std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
     std::vector<std::string> parts;
     for (const EffectProbability& e : EffectProbabilities(all)) {
       if (parts.size() == 3) break;
-      parts.push_back(model::KindName(e.kind) + " on " + e.target + " " + prob(e.probability));
+      parts.push_back(model::KindName(e.kind) + " on " + model::TargetText(e.target) + " " + prob(e.probability));
     }
     if (!parts.empty()) words << " Summed over the candidates that hold it: " << Join(parts, ", ") << ".";
   }
@@ -298,23 +305,27 @@ std::string Explain(const std::vector<Candidate>& all, const Candidate& none) {
 using detail::FormatNumber;
 using detail::Join;
 
-std::string EffectWildcard(const std::string& target) {
-  const auto slash = target.find('/');
-  if (slash != std::string::npos) return target.substr(0, slash) + "/*";
-  if (target.rfind("points:", 0) == 0 && target.find(',') == std::string::npos) return "points:*";
-  return target;
+std::optional<model::EffectTarget> EffectWildcard(const model::EffectTarget& target) {
+  if (target.form == model::EffectTarget::Form::kMember) return model::EffectTarget::EveryMemberOf(target.name);
+  if (target.form == model::EffectTarget::Form::kPoints && target.points.size() == 1)
+    return model::EffectTarget::EveryPoint();
+  return std::nullopt;
 }
 
 namespace {
 
-// An effect's kind and target, ordered by the kind's name and then the target: effects of equal
-// probability keep the order they have always had in DIAG.json.
+// An effect's kind and target, ordered by the kind's name and then the target's text: effects of
+// equal probability keep the order they have always had in DIAG.json.
 struct EffectKey {
   model::EffectKind kind;
-  std::string target;
+  model::EffectTarget target;
+  std::string text;  ///< TargetText(target), for the order only
+  EffectKey(model::EffectKind k, model::EffectTarget t)
+      : kind(k), target(std::move(t)), text(model::TargetText(target)) {}
   bool operator<(const EffectKey& other) const {
     const int by_name = std::strcmp(model::Info(kind).name, model::Info(other.kind).name);
-    return by_name != 0 ? by_name < 0 : target < other.target;
+    if (by_name != 0) return by_name < 0;
+    return text != other.text ? text < other.text : target < other.target;
   }
 };
 
@@ -328,7 +339,7 @@ std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>&
     std::set<EffectKey> keys;
     for (const model::Effect& e : c.effects) {
       keys.insert({e.kind, e.target});
-      keys.insert({e.kind, EffectWildcard(e.target)});
+      if (const auto wildcard = EffectWildcard(e.target)) keys.insert({e.kind, *wildcard});
     }
     for (const auto& k : keys) sums[k] += c.probability;
   }
@@ -344,17 +355,19 @@ std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>&
 std::vector<CandidateGroup> GroupCandidates(const std::vector<Candidate>& ranked) {
   std::vector<CandidateGroup> groups;
   // One group per sequence of kinds on the same wildcard targets.
-  std::map<std::pair<std::vector<model::EffectKind>, std::vector<std::string>>, size_t> index;
+  std::map<std::pair<std::vector<model::EffectKind>, std::vector<model::EffectTarget>>, size_t> index;
   for (const Candidate& c : ranked) {
     if (!c.error.empty()) continue;
     std::vector<model::EffectKind> kinds;
-    std::vector<std::string> targets;
+    std::vector<model::EffectTarget> targets;
+    std::vector<std::string> texts;
     for (const model::Effect& e : c.effects) {
       kinds.push_back(e.kind);
-      targets.push_back(EffectWildcard(e.target));
+      targets.push_back(EffectWildcard(e.target).value_or(e.target));
+      texts.push_back(model::TargetText(targets.back()));
     }
     auto [it, fresh] = index.emplace(std::make_pair(kinds, targets), groups.size());
-    if (fresh) groups.push_back({c.kind, Join(targets, "+"), {}, 0.0});
+    if (fresh) groups.push_back({c.kind, Join(texts, "+"), {}, 0.0});
     CandidateGroup& g = groups[it->second];
     g.ranks.push_back(c.rank);
     g.probability += std::isfinite(c.probability) ? c.probability : 0.0;
@@ -389,12 +402,14 @@ std::string DescribeCandidate(const Candidate& c, bool with_law_values) {
       const std::string shown = std::abs(v) < 1e-3 ? FormatNumber(v * 1e6, 3) + " µm" : FormatNumber(v, 4);
       parts.push_back("an operating point (setting/gap/preload) of " + shown + " for " + detail::Where(e.target));
     } else if (kind == model::EffectKind::kAddedMass) {
-      const std::string at = e.target.rfind("points:", 0) == 0 ? "point " + e.target.substr(7) : e.target;
-      parts.push_back("an added mass of " + FormatNumber(param("mass") * 1e3, 3) + " g per point at " + at);
+      parts.push_back("an added mass of " + FormatNumber(param("mass") * 1e3, 3) + " g per point at " +
+                      detail::PointWords(e.target));
     } else if (kind == model::EffectKind::kMassScale) {
-      parts.push_back("the mass and inertia of body '" + e.target + "' scaled by " + FormatNumber(param("factor"), 3));
+      parts.push_back("the mass and inertia of body '" + model::TargetText(e.target) + "' scaled by " +
+                      FormatNumber(param("factor"), 3));
     } else {
-      parts.push_back("a spring to ground of " + FormatNumber(param("k") / 1e6, 3) + " N/µm on body '" + e.target + "'");
+      parts.push_back("a spring to ground of " + FormatNumber(param("k") / 1e6, 3) + " N/µm on body '" +
+                      model::TargetText(e.target) + "'");
     }
   }
   return Join(parts, " together with ");
@@ -408,7 +423,7 @@ std::vector<std::string> ParameterKeys(const Candidate& c) {
     const std::string key = model::KindName(p.effect_kind) + "." + p.name;
     if (c.effects.size() <= 1) keys.push_back(p.name);
     else if (count[key] == 1) keys.push_back(key);
-    else keys.push_back(key + "[" + p.target + "]");
+    else keys.push_back(key + "[" + model::TargetText(p.target) + "]");
   }
   return keys;
 }

@@ -364,7 +364,8 @@ json CorrelationJson(const correlation::CorrelationResult& r, const ModeSet& tes
 }
 
 json EffectJson(const model::Effect& e) {
-  json out = {{"kind", model::KindName(e.kind)}, {"target", e.target}, {"parameters", json::object()}};
+  json out = {
+      {"kind", model::KindName(e.kind)}, {"target", model::TargetText(e.target)}, {"parameters", json::object()}};
   for (const auto& [k, v] : e.parameters) out["parameters"][k] = v;
   if (e.law) out["law"] = LawToToml(*e.law);
   return ValidUtf8(std::move(out));
@@ -416,7 +417,9 @@ json CandidateJson(const diagnose::Candidate& c) {
                         {"dominates", c.model_error.dominates}};
   out["outside_stated"] = json::array();
   for (const auto& p : c.parameters)
-    if (p.outside_prior) out["outside_stated"].push_back({{"target", p.target}, {"sigmas", NumberOrNull(std::abs(p.prior_z))}});
+    if (p.outside_prior)
+      out["outside_stated"].push_back(
+          {{"target", model::TargetText(p.target)}, {"sigmas", NumberOrNull(std::abs(p.prior_z))}});
   // Evidence per test mode: where the candidate leaves the model against the test, in σ.
   out["modes"] = json::array();
   for (const auto& m : c.modes)
@@ -461,7 +464,7 @@ json DiagnosisJson(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions
   out["effect_probabilities"] = json::array();
   for (const auto& e : d.effect_probabilities)
     out["effect_probabilities"].push_back(
-        {{"kind", model::KindName(e.kind)}, {"target", e.target}, {"probability", e.probability}});
+        {{"kind", model::KindName(e.kind)}, {"target", model::TargetText(e.target)}, {"probability", e.probability}});
   // Look-alike candidates folded into one row each (the same reading on another member or point).
   out["groups"] = json::array();
   for (const auto& g : d.groups)

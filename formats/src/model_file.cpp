@@ -335,8 +335,10 @@ class Reader : public TomlFields {
       p.line = Line(t);
       p.name = String(Require(t, "name", "[[fe.part]]"), "name");
       const std::string ctx = "part '" + p.name + "'";
-      if (p.name.empty() || p.name.find('/') != std::string::npos || p.name.find('+') != std::string::npos)
-        throw InputError(At(*t.get("name")), "[[fe.part]]: name must be a non-empty name without '/' or '+'");
+      if (p.name.empty() || p.name.find('/') != std::string::npos || p.name.find('+') != std::string::npos ||
+          p.name == "*")
+        throw InputError(At(*t.get("name")),
+                         "[[fe.part]]: name must be a non-empty name without '/' or '+', and not '*'");
       if (!part_names.insert(p.name).second) throw InputError(At(t), "[[fe.part]]: duplicate part name '" + p.name + "'");
       if (const toml::node* g = t.get("group")) {
         p.group = String(*g, "group");
@@ -472,6 +474,10 @@ class Reader : public TomlFields {
       b.line = Line(t);
       b.name = String(Require(t, "name", "[[body]]"), "name");
       if (b.name == model::kGround) throw InputError(At(t), "[[body]]: 'ground' is a reserved body name");
+      if (b.name.find('/') != std::string::npos)
+        throw InputError(At(*t.get("name")), "[[body]]: name '" + b.name +
+                                                 "' has a '/': expected a name without it "
+                                                 "('/' separates a group from its member in an effect's target)");
       if (!names.insert(b.name).second) throw InputError(At(t), "[[body]]: duplicate body name '" + b.name + "'");
       b.mass = Number(Require(t, "mass", "[[body]] " + b.name), "mass");
       if (!(b.mass > 0.0)) throw InputError(At(*t.get("mass")), "body '" + b.name + "': mass must be > 0");
@@ -506,10 +512,18 @@ class Reader : public TomlFields {
       s.name = String(Require(t, "name", "[[spring]]"), "name");
       const std::string ctx = "spring '" + s.name + "'";
       s.group = t.get("group") ? String(*t.get("group"), "group") : s.name;
+      if (s.group.find('/') != std::string::npos) {
+        const toml::node* group = t.get("group");
+        const std::string what = group ? ": group must be a name without '/'"
+                                       : ": a spring without 'group' is a group of its own, named after it, and a "
+                                         "group's name has no '/': give it a group";
+        throw InputError(At(group ? *group : *t.get("name")),
+                         ctx + what + " ('/' separates a group from its member in an effect's target)");
+      }
       if (const toml::node* mem = t.get("member")) {
         s.member = String(*mem, "member");
-        if (s.member.empty() || s.member.find('/') != std::string::npos)
-          throw InputError(At(*mem), ctx + ": member must be a non-empty name without '/'");
+        if (s.member.empty() || s.member.find('/') != std::string::npos || s.member == "*")
+          throw InputError(At(*mem), ctx + ": member must be a non-empty name without '/', and not '*'");
       }
       if (const toml::node* u = t.get("uncertainty")) s.uncertainty = Uncertainty(*u, ctx);
       if (const toml::node* k = t.get("kind")) {
@@ -586,18 +600,24 @@ class Reader : public TomlFields {
     model::Effect e;
     e.line = Line(t);
     const std::string kind = String(Require(t, "kind", "[[effect]]"), "kind");
-    e.target = String(Require(t, "target", "[[effect]]"), "target");
+    const toml::node& target_node = Require(t, "target", "[[effect]]");
+    const std::string target = String(target_node, "target");
     for (const char* key : {"factor", "value", "mass", "k"})
       if (auto v = OptNumber(t, key)) e.parameters[key] = *v;
     if (const toml::node* l = t.get("law")) e.law = ParseLaw(*l, "effect " + kind);
-    // The one place an effect's kind is read from text (DIAG.json's effects come through here too).
+    // The one place an effect's kind and target are read from text (DIAG.json's effects come
+    // through here too).
     const model::EffectKindInfo* info = model::FindEffectKind(kind);
     if (!info) {
       std::string kinds;
       for (const std::string& k : model::EffectKinds()) kinds += (kinds.empty() ? "" : ", ") + k;
-      throw InputError(At(t), "effect " + kind + " '" + e.target + "': unknown effect kind (allowed: " + kinds + ")");
+      throw InputError(At(t), "effect " + kind + " '" + target + "': unknown effect kind (allowed: " + kinds + ")");
     }
     e.kind = info->kind;
+    std::string why;
+    std::optional<model::EffectTarget> parsed = model::ParseEffectTarget(e.kind, target, &why);
+    if (!parsed) throw InputError(At(target_node), "effect " + kind + " '" + target + "': " + why);
+    e.target = std::move(*parsed);
     return e;
   }
 
@@ -673,8 +693,8 @@ std::string LawToToml(const model::Law& law) {
 }
 
 std::string EffectToToml(const model::Effect& e) {
-  std::string s =
-      "[[effect]]\nkind = " + TomlString(model::KindName(e.kind)) + "\ntarget = " + TomlString(e.target) + "\n";
+  std::string s = "[[effect]]\nkind = " + TomlString(model::KindName(e.kind)) +
+                  "\ntarget = " + TomlString(model::TargetText(e.target)) + "\n";
   const bool k_as_law = e.kind == model::EffectKind::kSeriesCompliance && !e.law && e.parameters.count("k");
   for (const auto& [k, v] : e.parameters)
     if (!(k_as_law && k == "k")) s += k + " = " + Num(v) + "\n";

@@ -42,12 +42,14 @@ bool LooksLikeJson(const std::filesystem::path& path) {
 }
 
 ModeSet ReadModeSetJson(const std::filesystem::path& path) {
-  const std::string file = path.string();
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(file, "cannot open the modes file");
+  if (!in) throw InputError(path.string(), "cannot open the modes file");
   std::stringstream buffer;
   buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  return ReadModeSetJsonText(buffer.str(), path.string());
+}
+
+ModeSet ReadModeSetJsonText(const std::string& text, const std::string& file) {
   json root;
   try {
     root = json::parse(text);

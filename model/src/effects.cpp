@@ -15,7 +15,7 @@ namespace ema::model {
 namespace {
 
 std::string Where(const Model& model, const Effect& e) {
-  return model.Where(e.line) + ": effect " + KindName(e.kind) + " '" + e.target + "'";
+  return model.Where(e.line) + ": effect " + KindName(e.kind) + " '" + TargetText(e.target) + "'";
 }
 
 double Param(const Model& model, const Effect& e, const std::string& key, bool positive) {
@@ -49,31 +49,33 @@ std::vector<Spring*> GroupSprings(Model& model, const Effect& e) {
     for (const Spring& s : model.springs) groups.insert(s.group);
     std::string known;
     for (const auto& g : groups) known += (known.empty() ? "" : ", ") + g;
-    const auto slash = e.target.find('/');
-    if (slash != std::string::npos && groups.count(e.target.substr(0, slash))) {
+    const EffectTarget& t = e.target;
+    if (t.form == EffectTarget::Form::kMember && groups.count(t.name)) {
       std::string members;
       for (const Member& m : Members(model))
-        if (m.group == e.target.substr(0, slash)) members += (members.empty() ? "" : ", ") + m.name;
-      throw InputError(Where(model, e), "no member '" + e.target.substr(slash + 1) + "' in group '" +
-                                            e.target.substr(0, slash) + "' (members: " + members + ")");
+        if (m.group == t.name) members += (members.empty() ? "" : ", ") + m.name;
+      throw InputError(Where(model, e),
+                       "no member '" + t.member + "' in group '" + t.name + "' (members: " + members + ")");
     }
     if (!model.fe.parts.empty())
-      throw InputError(Where(model, e), "no spring group, part group or part '" + e.target + "' (targets: " +
-                                            KnownTargets(model, false) + ")");
-    throw InputError(Where(model, e), "no spring group '" + e.target + "' (groups: " + (known.empty() ? "none" : known) + ")");
+      throw InputError(Where(model, e), "no spring group, part group or part '" + TargetText(t) +
+                                            "' (targets: " + KnownTargets(model, false) + ")");
+    throw InputError(Where(model, e),
+                     "no spring group '" + TargetText(t) + "' (groups: " + (known.empty() ? "none" : known) + ")");
   }
   return out;
 }
 
-Body& TargetBody(Model& model, const Effect& e) {
-  Body* b = model.FindBody(e.target);
+Body& EffectBody(Model& model, const Effect& e) {
+  Body* b = e.target.form == EffectTarget::Form::kName ? model.FindBody(e.target.name) : nullptr;
   if (!b) {
     std::string known;
     for (const Body& x : model.bodies) known += (known.empty() ? "" : ", ") + x.name;
     if (!model.fe.parts.empty() && e.kind == EffectKind::kMassScale)
-      throw InputError(Where(model, e), "no body, part group or part '" + e.target + "' (targets: " +
-                                            KnownTargets(model, true) + ")");
-    throw InputError(Where(model, e), "no body '" + e.target + "' (bodies: " + (known.empty() ? "none" : known) + ")");
+      throw InputError(Where(model, e), "no body, part group or part '" + TargetText(e.target) +
+                                            "' (targets: " + KnownTargets(model, true) + ")");
+    throw InputError(Where(model, e),
+                     "no body '" + TargetText(e.target) + "' (bodies: " + (known.empty() ? "none" : known) + ")");
   }
   return *b;
 }
@@ -128,17 +130,16 @@ std::vector<FePart*> Parts(Model& model, const Effect& e, bool bodies) {
   std::vector<FePart*> out;
   for (int i : TargetParts(model, e.target)) out.push_back(&model.fe.parts[static_cast<std::size_t>(i)]);
   if (out.empty()) {
-    const auto slash = e.target.find('/');
-    if (slash != std::string::npos) {
+    if (e.target.form == EffectTarget::Form::kMember) {
       std::string members;
       for (const FePart& p : model.fe.parts)
-        if (p.group == e.target.substr(0, slash)) members += (members.empty() ? "" : ", ") + p.name;
+        if (p.group == e.target.name) members += (members.empty() ? "" : ", ") + p.name;
       if (!members.empty())
-        throw InputError(Where(model, e), "no part '" + e.target.substr(slash + 1) + "' in part group '" +
-                                              e.target.substr(0, slash) + "' (members: " + members + ")");
+        throw InputError(Where(model, e), "no part '" + e.target.member + "' in part group '" + e.target.name +
+                                              "' (members: " + members + ")");
     }
-    throw InputError(Where(model, e), "no spring group, part group or part '" + e.target + "' (targets: " +
-                                          KnownTargets(model, bodies) + ")");
+    throw InputError(Where(model, e), "no spring group, part group or part '" + TargetText(e.target) +
+                                          "' (targets: " + KnownTargets(model, bodies) + ")");
   }
   return out;
 }
@@ -161,7 +162,9 @@ void ApplyOperatingPoint(Model& model, const Effect& e) {
   if (it == e.parameters.end() || !std::isfinite(it->second)) throw InputError(Where(model, e), "missing parameter 'value'");
   bool any = false;
   for (Spring* s : GroupSprings(model, e)) any |= SetOperatingValue(s->law, it->second);
-  if (!any) throw InputError(Where(model, e), "'" + e.target + "' has only linear laws; no operating point to change");
+  if (!any)
+    throw InputError(Where(model, e),
+                     "'" + TargetText(e.target) + "' has only linear laws; no operating point to change");
 }
 
 void ApplyAddedMass(Model& model, const Effect& e) {
@@ -176,14 +179,14 @@ void ApplyAddedMass(Model& model, const Effect& e) {
 
 void ApplyMassScale(Model& model, const Effect& e) {
   const double f = Param(model, e, "factor", true);
-  if (!model.FindBody(e.target) && !model.fe.parts.empty()) {
+  if (!TargetBody(model, e.target) && !model.fe.parts.empty()) {
     for (FePart* p : Parts(model, e, true)) {
       if (!p->HasMass()) throw InputError(Where(model, e), "part '" + p->name + "' has no mass matrix to scale");
       p->mass_factor *= f;
     }
     return;
   }
-  Body& b = TargetBody(model, e);
+  Body& b = EffectBody(model, e);
   b.mass *= f;
   b.inertia *= f;
   b.products *= f;
@@ -191,7 +194,7 @@ void ApplyMassScale(Model& model, const Effect& e) {
 
 void ApplyGroundSpring(Model& model, const Effect& e) {
   const double k = Param(model, e, "k", false);
-  const Body& b = TargetBody(model, e);
+  const Body& b = EffectBody(model, e);
   static const char* kAxis[] = {"x", "y", "z"};
   for (int i = 0; i < 3; ++i) {
     Spring s;
@@ -213,24 +216,25 @@ const std::vector<EffectKindInfo>& EffectKindTable() {
   // with the range widened there, diagnose/search.cpp); the priors, not the ranges, say what is
   // plausible. Priors: docs/diagnose.md.
   static const std::vector<EffectKindInfo> kTable = {
-      {EffectKind::kSeriesCompliance, "series_compliance", "k", EffectTarget::kSprings, true, 1e-4, 1e4, +1,
+      {EffectKind::kSeriesCompliance, "series_compliance", "k", ActsOn::kSprings, true, 1e-4, 1e4, +1,
        PriorShape::kLogNormal, 1.5, "1σ of ln(k / the target's mean stiffness)",
        "a mount, joint or adhesive layer in series with the interface", ApplySeriesCompliance},
-      {EffectKind::kStiffnessScale, "stiffness_scale", "factor", EffectTarget::kSprings, true, 1e-3, 1e3, 0,
-       PriorShape::kLogNormal, 0.5, "1σ of ln(factor); a spring's or part's `uncertainty` overrides it; beyond it a 2 % fault tail (1σ 3 in ln) keeps a part or joint grossly off in play",
+      {EffectKind::kStiffnessScale, "stiffness_scale", "factor", ActsOn::kSprings, true, 1e-3, 1e3, 0,
+       PriorShape::kLogNormal, 0.5,
+       "1σ of ln(factor); a spring's or part's `uncertainty` overrides it; beyond it a 2 % fault tail (1σ 3 in ln) "
+       "keeps a part or joint grossly off in play",
        "the interface stiffness itself is mis-estimated", ApplyStiffnessScale},
-      {EffectKind::kOperatingPoint, "operating_point", "value", EffectTarget::kSprings, true, 0.05, 20.0, 0,
+      {EffectKind::kOperatingPoint, "operating_point", "value", ActsOn::kSprings, true, 0.05, 20.0, 0,
        PriorShape::kLogNormal, 0.5, "1σ of ln(value / nominal value)",
        "the gap, preload or setting differs from the nominal one", ApplyOperatingPoint},
-      {EffectKind::kAddedMass, "added_mass", "mass", EffectTarget::kPoints, false, 1e-5, 10.0, -1,
-       PriorShape::kHalfNormal, 0.02, "1σ of the mass per point, as a share of the model's mass",
-       "sensor mass loading, cables, payload", ApplyAddedMass},
-      {EffectKind::kMassScale, "mass_scale", "factor", EffectTarget::kBody, false, 0.01, 100.0, 0,
-       PriorShape::kLogNormal, 0.05, "1σ of ln(factor); a body's `uncertainty` overrides it",
-       "body mass or inertia mis-estimated", ApplyMassScale},
-      {EffectKind::kGroundSpring, "ground_spring", "k", EffectTarget::kBody, false, 1e-5, 1e4, -1,
-       PriorShape::kLogNormal, 3.0, "1σ of ln(k / 0.1 x the mean spring stiffness)",
-       "the \"fixed\" support is flexible", ApplyGroundSpring},
+      {EffectKind::kAddedMass, "added_mass", "mass", ActsOn::kPoints, false, 1e-5, 10.0, -1, PriorShape::kHalfNormal,
+       0.02, "1σ of the mass per point, as a share of the model's mass", "sensor mass loading, cables, payload",
+       ApplyAddedMass},
+      {EffectKind::kMassScale, "mass_scale", "factor", ActsOn::kBody, false, 0.01, 100.0, 0, PriorShape::kLogNormal,
+       0.05, "1σ of ln(factor); a body's `uncertainty` overrides it", "body mass or inertia mis-estimated",
+       ApplyMassScale},
+      {EffectKind::kGroundSpring, "ground_spring", "k", ActsOn::kBody, false, 1e-5, 1e4, -1, PriorShape::kLogNormal,
+       3.0, "1σ of ln(k / 0.1 x the mean spring stiffness)", "the \"fixed\" support is flexible", ApplyGroundSpring},
   };
   return kTable;
 }
@@ -306,25 +310,26 @@ std::vector<Effect> CandidateEffects(const Model& input) {
   }
   for (const std::string& g : groups) {
     const double k_mean = k_sum[g].second > 0 ? k_sum[g].first / k_sum[g].second : 0.0;
-    Effect sc{EffectKind::kSeriesCompliance, g, {}, Law(LinearLaw{k_mean > 0.0 ? k_mean : 1.0e6}), 0};
+    const EffectTarget group = EffectTarget::Named(g);
+    Effect sc{EffectKind::kSeriesCompliance, group, {}, Law(LinearLaw{k_mean > 0.0 ? k_mean : 1.0e6}), 0};
     out.push_back(sc);
-    out.push_back(Effect{EffectKind::kStiffnessScale, g, {{"factor", 1.0}}, std::nullopt, 0});
+    out.push_back(Effect{EffectKind::kStiffnessScale, group, {{"factor", 1.0}}, std::nullopt, 0});
     if (op_value.count(g))
-      out.push_back(Effect{EffectKind::kOperatingPoint, g, {{"value", op_value[g]}}, std::nullopt, 0});
+      out.push_back(Effect{EffectKind::kOperatingPoint, group, {{"value", op_value[g]}}, std::nullopt, 0});
   }
   if (!model.points.empty())
-    out.push_back(Effect{EffectKind::kAddedMass, "all_points", {{"mass", 0.0}}, std::nullopt, 0});
+    out.push_back(Effect{EffectKind::kAddedMass, EffectTarget::AllPoints(), {{"mass", 0.0}}, std::nullopt, 0});
   const double k_ground = all_n > 0 ? 1e-3 * all_k / all_n : 1.0e3;
   for (const Body& b : model.bodies)
-    out.push_back(Effect{EffectKind::kMassScale, b.name, {{"factor", 1.0}}, std::nullopt, 0});
+    out.push_back(Effect{EffectKind::kMassScale, EffectTarget::Named(b.name), {{"factor", 1.0}}, std::nullopt, 0});
   for (const Body& b : model.bodies)
-    out.push_back(Effect{EffectKind::kGroundSpring, b.name, {{"k", k_ground}}, std::nullopt, 0});
+    out.push_back(Effect{EffectKind::kGroundSpring, EffectTarget::Named(b.name), {{"k", k_ground}}, std::nullopt, 0});
   return out;
 }
 
 std::string Describe(const Effect& e) {
   std::ostringstream s;
-  s << KindName(e.kind) << " " << e.target;
+  s << KindName(e.kind) << " " << TargetText(e.target);
   for (const auto& [k, v] : e.parameters) s << " " << k << "=" << v;
   if (e.law) {
     s << " law=" << e.law->KindName();
@@ -452,21 +457,11 @@ std::vector<Member> Members(const Model& model) {
 
 std::vector<int> TargetPoints(const Model& model, const Effect& e) {
   std::vector<int> targets;
-  if (e.target == "all_points") {
+  if (e.target.form == EffectTarget::Form::kAllPoints) {
     for (std::size_t i = 0; i < model.points.size(); ++i) targets.push_back(static_cast<int>(i));
     if (targets.empty()) throw InputError(Where(model, e), "the model has no [[point]]");
-  } else if (e.target.rfind("points:", 0) == 0) {
-    std::stringstream list(e.target.substr(7));
-    std::string item;
-    while (std::getline(list, item, ',')) {
-      int id = 0;
-      try {
-        std::size_t used = 0;
-        id = std::stoi(item, &used);
-        if (item.find_first_not_of(" ", used) != std::string::npos) throw std::invalid_argument(item);
-      } catch (const std::exception&) {
-        throw InputError(Where(model, e), "bad point id '" + item + "' (expected points:101,102)");
-      }
+  } else if (e.target.form == EffectTarget::Form::kPoints) {
+    for (int id : e.target.points) {
       int found = -1;
       for (std::size_t i = 0; i < model.points.size(); ++i)
         if (model.points[i].id == id) found = static_cast<int>(i);
@@ -479,26 +474,33 @@ std::vector<int> TargetPoints(const Model& model, const Effect& e) {
   return targets;
 }
 
-std::vector<int> TargetSprings(const Model& model, const std::string& target) {
+std::vector<int> TargetSprings(const Model& model, const EffectTarget& target) {
   std::vector<int> out;
-  for (size_t i = 0; i < model.springs.size(); ++i)
-    if (model.springs[i].group == target) out.push_back(static_cast<int>(i));
-  if (!out.empty()) return out;
-  const auto slash = target.find('/');
-  if (slash == std::string::npos) return out;
-  const std::string group = target.substr(0, slash), name = target.substr(slash + 1);
-  for (const Member& m : Members(model))
-    if (m.group == group && m.name == name) return m.springs;
+  if (target.form == EffectTarget::Form::kName) {
+    for (size_t i = 0; i < model.springs.size(); ++i)
+      if (model.springs[i].group == target.name) out.push_back(static_cast<int>(i));
+  } else if (target.form == EffectTarget::Form::kMember) {
+    for (const Member& m : Members(model))
+      if (m.group == target.name && m.name == target.member) return m.springs;
+  }
   return out;
 }
 
-std::vector<int> TargetParts(const Model& model, const std::string& target) {
+std::vector<int> TargetParts(const Model& model, const EffectTarget& target) {
   std::vector<int> out;
   const auto& parts = model.fe.parts;
-  for (size_t i = 0; i < parts.size(); ++i)
-    if (parts[i].group == target || (parts[i].group.empty() && parts[i].name == target) || parts[i].Target() == target)
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const FePart& p = parts[i];
+    const bool named = target.form == EffectTarget::Form::kName &&
+                       (p.group == target.name || (p.group.empty() && p.name == target.name));
+    if (named || (target.form == EffectTarget::Form::kMember && p.Target() == target))
       out.push_back(static_cast<int>(i));
+  }
   return out;
+}
+
+const Body* TargetBody(const Model& model, const EffectTarget& target) {
+  return target.form == EffectTarget::Form::kName ? model.FindBody(target.name) : nullptr;
 }
 
 }  // namespace ema::model

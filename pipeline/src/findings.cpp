@@ -76,7 +76,7 @@ GroupSpan SpanOf(const diagnose::Diagnosis& d, const diagnose::CandidateGroup& g
     for (std::size_t i = 0; i < c->effects.size(); ++i) {
       const model::Effect& e = c->effects[i];
       if (i < best->effects.size() && best->effects[i].target == e.target) continue;
-      if (model::Info(e.kind).target == model::EffectTarget::kPoints) points = true;
+      if (model::Info(e.kind).acts_on == model::ActsOn::kPoints) points = true;
       else others = true;
     }
   if (points && !others) return GroupSpan::kPoints;
@@ -109,10 +109,10 @@ Findings FindingsOf(const diagnose::Diagnosis& d, const model::Model& model) {
   for (const model::Effect& e : first.effects) {
     EffectFinding f;
     f.effect = e;
-    const std::string wildcard = diagnose::EffectWildcard(e.target);
+    const std::optional<model::EffectTarget> wildcard = diagnose::EffectWildcard(e.target);
     for (const diagnose::EffectProbability& ep : d.effect_probabilities) {
       if (ep.kind == e.kind && ep.target == e.target) f.probability = ep.probability;
-      if (ep.kind == e.kind && ep.target == wildcard && wildcard != e.target) {
+      if (ep.kind == e.kind && wildcard && ep.target == *wildcard) {
         f.wildcard = wildcard;
         f.wildcard_probability = ep.probability;
       }

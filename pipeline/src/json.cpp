@@ -35,7 +35,7 @@ json FindingsJson(const Findings& findings) {
     diagnose::Candidate single;
     single.effects = {f.effect};
     single.kind = model::KindName(f.effect.kind);
-    single.target = f.effect.target;
+    single.target = model::TargetText(f.effect.target);
     json parameters = json::array();
     for (const diagnose::FittedParameter& p : f.parameters)
       parameters.push_back({{"name", p.name}, {"value", NumberOrNull(p.value)}, {"sigma", NumberOrNull(p.sigma)}});
@@ -45,12 +45,12 @@ json FindingsJson(const Findings& findings) {
                          {"per_spring_n_per_m", NumberOrNull(s.per_spring_n_per_m)},
                          {"element_n_per_m", NumberOrNull(s.element_n_per_m)}});
     json j = {{"kind", model::KindName(f.effect.kind)},
-              {"target", f.effect.target},
+              {"target", model::TargetText(f.effect.target)},
               {"description", diagnose::DescribeCandidate(single, false)},
               {"probability", f.probability},
               {"parameters", std::move(parameters)},
               {"springs", std::move(springs)}};
-    if (!f.wildcard.empty()) j["any"] = {{"target", f.wildcard}, {"probability", f.wildcard_probability}};
+    if (f.wildcard) j["any"] = {{"target", model::TargetText(*f.wildcard)}, {"probability", f.wildcard_probability}};
     out.push_back(std::move(j));
   }
   return formats::ValidUtf8(std::move(out));  // targets and setups are the model's texts

@@ -49,12 +49,7 @@ FitStage FitModes(const FrfSet& frfs, const curvefit::FitOptions& options, const
                   const std::string& modes_path, const ProgressCallback& progress) {
   FitStage stage;
   stage.options = options;
-  try {
-    stage.fit = curvefit::Fit(frfs, options, source, progress);
-  } catch (const InputError& e) {
-    if (e.Where().rfind(source, 0) == 0) throw;  // already placed in the FRFs (a record, a line)
-    throw InputError(source, e.what());
-  }
+  stage.fit = curvefit::Fit(frfs, options, source, progress);  // its errors name `source`
   if (stage.fit.modes.modes.empty()) throw InputError(source, NoModeReason(stage.fit, options));
   stage.fit.modes.source = source;
   stage.stored_modes = formats::StoredModeSet(stage.fit.modes, modes_path);

@@ -11,8 +11,11 @@
 
 #include "browser_check.hpp"
 #include "ema/model/effects.hpp"
+#include "embedded_assets.hpp"
 #include "report.hpp"
 #include "words.hpp"
+
+using ema::model::EffectTarget;
 
 namespace ema::report {
 namespace {
@@ -122,7 +125,7 @@ CorrelationView Correlation(const Truth& truth, const ModeSet& test, double fact
   return view;
 }
 
-model::Effect Effect(EffectKind kind, const std::string& target, std::map<std::string, double> parameters = {}) {
+model::Effect Effect(EffectKind kind, const EffectTarget& target, std::map<std::string, double> parameters = {}) {
   model::Effect e;
   e.kind = kind;
   e.target = target;
@@ -130,7 +133,7 @@ model::Effect Effect(EffectKind kind, const std::string& target, std::map<std::s
   return e;
 }
 
-diagnose::FittedParameter Parameter(EffectKind kind, const std::string& target, const std::string& name, double value,
+diagnose::FittedParameter Parameter(EffectKind kind, const EffectTarget& target, const std::string& name, double value,
                                     double sigma) {
   diagnose::FittedParameter p;
   p.effect_kind = kind;
@@ -149,7 +152,7 @@ diagnose::Candidate Candidate(int rank, std::vector<model::Effect> effects, std:
   c.parameters = std::move(parameters);
   for (const model::Effect& e : c.effects) {
     c.kind += (c.kind.empty() ? "" : "+") + model::KindName(e.kind);
-    c.target += (c.target.empty() ? "" : "+") + e.target;
+    c.target += (c.target.empty() ? "" : "+") + model::TargetText(e.target);
   }
   if (c.effects.empty()) c.kind = "none";
   c.probability = probability;
@@ -163,13 +166,15 @@ diagnose::Candidate Candidate(int rank, std::vector<model::Effect> effects, std:
 pipeline::DiagnoseStage SmallDiagnosis() {
   pipeline::DiagnoseStage stage;
   diagnose::Diagnosis& d = stage.diagnosis;
-  d.candidates.push_back(Candidate(1, {Effect(EffectKind::kSeriesCompliance, "bearings", {{"k", 3.2e6}})},
-                                   {Parameter(EffectKind::kSeriesCompliance, "bearings", "k", 3.2e6, kNaN)}, 0.9, 0.4,
-                                   0.99, 0.5));
+  d.candidates.push_back(
+      Candidate(1, {Effect(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), {{"k", 3.2e6}})},
+                {Parameter(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), "k", 3.2e6, kNaN)}, 0.9, 0.4,
+                0.99, 0.5));
   d.candidates[0].noise_consistent = true;
-  d.candidates.push_back(Candidate(2, {Effect(EffectKind::kStiffnessScale, "bearings", {{"factor", 0.4}})},
-                                   {Parameter(EffectKind::kStiffnessScale, "bearings", "factor", 0.4, kNaN)}, 0.1, 6.1,
-                                   0.98, 40.0));
+  d.candidates.push_back(
+      Candidate(2, {Effect(EffectKind::kStiffnessScale, EffectTarget::Named("bearings"), {{"factor", 0.4}})},
+                {Parameter(EffectKind::kStiffnessScale, EffectTarget::Named("bearings"), "factor", 0.4, kNaN)}, 0.1,
+                6.1, 0.98, 40.0));
   d.baseline = Candidate(3, {}, {}, 0.0, 37.5, 0.97, 1e4);
   d.groups = {{"series_compliance", "bearings", {1}, 0.9}, {"stiffness_scale", "bearings", {2}, 0.1}};
   stage.findings = pipeline::FindingsOf(d, model::Model());
@@ -239,14 +244,14 @@ pipeline::DiagnoseStage LookAlikeDiagnosis() {
     c.shape_misfit_sigma = shape;
     return c;
   };
-  model::Effect hertz = Effect(EffectKind::kSeriesCompliance, "bearings");
+  model::Effect hertz = Effect(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"));
   hertz.law = model::Law(model::HertzLaw{167667653337.85339, 0.001, 0.0, std::nullopt, std::nullopt});
   for (size_t i = 0; i < points.size(); ++i) {
-    const std::string point = "points:" + std::to_string(points[i]);
+    const EffectTarget point = EffectTarget::Points({points[i]});
     diagnose::Candidate c = Candidate(
         static_cast<int>(i) + 1, {hertz, Effect(EffectKind::kAddedMass, point, {{"mass", 0.0109}})},
         {Parameter(EffectKind::kAddedMass, point, "mass", 0.0109 - 0.0002 * static_cast<double>(i), 0.0026),
-         Parameter(EffectKind::kSeriesCompliance, "bearings", "modulus", 1.6767e11, 3.7e8)},
+         Parameter(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), "modulus", 1.6767e11, 3.7e8)},
         p_points[i], 0.0639 + 0.0001 * static_cast<double>(i), 0.9962, 32825.35 + static_cast<double>(i));
     if (i == 0) {
       c.flags = {flag};
@@ -257,16 +262,18 @@ pipeline::DiagnoseStage LookAlikeDiagnosis() {
   }
   model::Effect hertz_alone = hertz;
   hertz_alone.law = model::Law(model::HertzLaw{166393318085.0, 0.001, 0.0, std::nullopt, std::nullopt});
-  d.candidates.push_back(Candidate(9, {Effect(EffectKind::kSeriesCompliance, "bearings", {{"k", 15454793.18}})},
-                                   {Parameter(EffectKind::kSeriesCompliance, "bearings", "k", 15454793.18, 13520.76)},
-                                   0.0887, 0.1275, 0.99596, 41000.0));
   d.candidates.push_back(
-      Candidate(10, {hertz_alone},
-                {Parameter(EffectKind::kSeriesCompliance, "bearings", "modulus", 166393318085.04, 211531812.8)},
-                0.0125, 0.128, 0.99596, 41500.0));
-  diagnose::Candidate scale = Candidate(11, {Effect(EffectKind::kStiffnessScale, "bearings", {{"factor", 0.1338}})},
-                                        {Parameter(EffectKind::kStiffnessScale, "bearings", "factor", 0.1338, 0.000111)},
-                                        0.0, 26.6, 0.9959, 1.3e5);
+      Candidate(9, {Effect(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), {{"k", 15454793.18}})},
+                {Parameter(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), "k", 15454793.18, 13520.76)},
+                0.0887, 0.1275, 0.99596, 41000.0));
+  d.candidates.push_back(Candidate(10, {hertz_alone},
+                                   {Parameter(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), "modulus",
+                                              166393318085.04, 211531812.8)},
+                                   0.0125, 0.128, 0.99596, 41500.0));
+  diagnose::Candidate scale =
+      Candidate(11, {Effect(EffectKind::kStiffnessScale, EffectTarget::Named("bearings"), {{"factor", 0.1338}})},
+                {Parameter(EffectKind::kStiffnessScale, EffectTarget::Named("bearings"), "factor", 0.1338, 0.000111)},
+                0.0, 26.6, 0.9959, 1.3e5);
   scale.flags = {"the stiffness of group 'bearings' is 7.5× lower than modelled (4σ of its stated uncertainty of 50 %): check it"};
   d.candidates.push_back(scale);
   d.baseline = Candidate(12, {}, {}, 0.0, 114.28, 0.99596, 1.8e6);
@@ -284,10 +291,10 @@ pipeline::DiagnoseStage LookAlikeDiagnosis() {
   d.test_mode_count = 12;
   d.explanation = "a Hertz contact in series with group 'bearings' together with an added mass at point 111 "
                   "(probability 14.4 %) brings the mean frequency error from 114 % to 0.064 %.";
-  d.effect_probabilities = {{EffectKind::kSeriesCompliance, "bearings", 0.9999999999999997},
-                            {EffectKind::kAddedMass, "points:*", 0.8954},
-                            {EffectKind::kAddedMass, "points:111", 0.1483},
-                            {EffectKind::kAddedMass, "points:115", 0.1476}};
+  d.effect_probabilities = {{EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), 0.9999999999999997},
+                            {EffectKind::kAddedMass, EffectTarget::EveryPoint(), 0.8954},
+                            {EffectKind::kAddedMass, EffectTarget::Points({111}), 0.1483},
+                            {EffectKind::kAddedMass, EffectTarget::Points({115}), 0.1476}};
   d.groups = {{"series_compliance+added_mass", "bearings+points:*", {1, 2, 3, 4, 5, 6, 7, 8}, 0.8842},
               {"series_compliance", "bearings", {9, 10}, 0.1012},
               {"stiffness_scale", "bearings", {11}, 0.0},
@@ -380,22 +387,56 @@ TEST(ReportData, DiagnosisViewFoldsLookAlikesAndTellsTheStory) {
   EXPECT_TRUE(DiagnosisView(pipeline::DiagnoseStage()).empty());
 }
 
+// The adequacy sentence's bold headline and its rest are two fields: the page puts them side by
+// side and looks for no separator in the text (`adequacy` is still the whole sentence).
+TEST(ReportData, AdequacyHeadlineComesApartFromItsDetail) {
+  pipeline::DiagnoseStage stage = LookAlikeDiagnosis();
+  json story = DiagnosisView(stage)["story"];
+  EXPECT_EQ(story["adequacy_headline"], "Adequate to the test's noise: NO");
+  EXPECT_EQ(story["adequacy_detail"],
+            "reduced χ² 3.28 × 10⁴ over 12 test modes (1 would be noise alone): the model still misses something these "
+            "data can see; rank 1 is not the whole answer.");
+  EXPECT_EQ(story["adequacy"].get<std::string>(),
+            story["adequacy_headline"].get<std::string>() + " — " + story["adequacy_detail"].get<std::string>());
+  stage.findings.adequate = true;
+  stage.findings.reduced_chi2 = 0.83;
+  story = DiagnosisView(stage)["story"];
+  EXPECT_EQ(story["adequacy_headline"], "Adequate to the test's noise: yes");
+  EXPECT_EQ(story["adequacy_detail"],
+            "reduced χ² 0.83 over 12 test modes: what is left is what the measurement noise explains.");
+  stage.findings.well_inside_noise = true;
+  story = DiagnosisView(stage)["story"];
+  EXPECT_EQ(story["adequacy_headline"], "Adequate to the test's noise: yes");
+  EXPECT_EQ(story["adequacy_detail"].get<std::string>().rfind("reduced χ² below 0.01 over 12 test modes: ", 0), 0u);
+  // The page's script reads the two fields, and no separator out of the sentence.
+  const std::string script(ReportJs());
+  EXPECT_NE(script.find("story.adequacy_headline"), std::string::npos);
+  EXPECT_EQ(script.find("indexOf(' — ')"), std::string::npos);
+  EXPECT_EQ(script.find("split(' / ')"), std::string::npos);
+}
+
 TEST(ReportData, ParametersInEngineeringUnits) {
-  model::Effect hertz = Effect(EffectKind::kSeriesCompliance, "mounts");
+  model::Effect hertz = Effect(EffectKind::kSeriesCompliance, EffectTarget::Named("mounts"));
   hertz.law = model::Law(model::HertzLaw{5.72e10, 0.00829, 0.0, std::nullopt, std::nullopt});
-  EXPECT_EQ(ParameterWords(Parameter(EffectKind::kSeriesCompliance, "mounts", "k", 2.8e6, 1.1e5), nullptr),
+  EXPECT_EQ(ParameterWords(Parameter(EffectKind::kSeriesCompliance, EffectTarget::Named("mounts"), "k", 2.8e6, 1.1e5),
+                           nullptr),
             "k = 2.8 ± 0.11 N/µm");
-  EXPECT_EQ(ParameterWords(Parameter(EffectKind::kSeriesCompliance, "mounts", "modulus", 5.72e10, 1.1e9), &hertz),
-            "Hertz contact E' = 57.2 ± 1.1 GPa (R' = 8.29 mm)");
-  EXPECT_EQ(ParameterWords(Parameter(EffectKind::kAddedMass, "all_points", "mass", 0.0112, kNaN), nullptr),
+  EXPECT_EQ(
+      ParameterWords(Parameter(EffectKind::kSeriesCompliance, EffectTarget::Named("mounts"), "modulus", 5.72e10, 1.1e9),
+                     &hertz),
+      "Hertz contact E' = 57.2 ± 1.1 GPa (R' = 8.29 mm)");
+  EXPECT_EQ(ParameterWords(Parameter(EffectKind::kAddedMass, EffectTarget::AllPoints(), "mass", 0.0112, kNaN), nullptr),
             "11.2 g per point");
-  EXPECT_EQ(ParameterWords(Parameter(EffectKind::kMassScale, "top", "factor", 1.02, 0.048), nullptr),
-            "factor 1.02 ± 0.048");
-  EXPECT_EQ(ParameterWords(Parameter(EffectKind::kOperatingPoint, "pads", "value", 5e-6, 2.5e-6), nullptr),
+  EXPECT_EQ(
+      ParameterWords(Parameter(EffectKind::kMassScale, EffectTarget::Named("top"), "factor", 1.02, 0.048), nullptr),
+      "factor 1.02 ± 0.048");
+  EXPECT_EQ(ParameterWords(Parameter(EffectKind::kOperatingPoint, EffectTarget::Named("pads"), "value", 5e-6, 2.5e-6),
+                           nullptr),
             "value = 5 ± 2.5 µm");
   pipeline::EffectFinding finding;
   finding.effect = hertz;
-  finding.parameters = {Parameter(EffectKind::kSeriesCompliance, "mounts", "modulus", 5.72e10, 1.1e9)};
+  finding.parameters = {
+      Parameter(EffectKind::kSeriesCompliance, EffectTarget::Named("mounts"), "modulus", 5.72e10, 1.1e9)};
   finding.springs = {{"a", 2.8e6, 21.8e6}, {"b", 1.7e6, kNaN}};
   EXPECT_EQ(EffectValuesWords(finding), "Hertz contact E' = 57.2 ± 1.1 GPa (R' = 8.29 mm); per spring of 'mounts' now: "
                                         "2.8 N/µm at a, 1.7 N/µm at b (the element in series alone: 21.8 N/µm at a)");
@@ -582,7 +623,11 @@ TEST(Report, PageIsSelfContainedAndCarriesTheData) {
   EXPECT_EQ(data["setups"][0]["shapes"]["modes"].size(), 3u);
   ASSERT_EQ(data["setups"][0]["test_mode_table"]["modes"].size(), 3u);
   EXPECT_EQ(data["setups"][0]["test_mode_table"]["modes"][1]["frequency_hz"], 185.0);
-  EXPECT_EQ(data["setups"][0]["rejected"].size(), 1u);
+  ASSERT_EQ(data["setups"][0]["rejected"].size(), 1u);
+  // The impacted DOF is a field of its own: the page's table of rejected impacts reads it, not the
+  // FRF's label.
+  EXPECT_EQ(data["setups"][0]["rejected"][0]["reference"], "1+Z");
+  EXPECT_EQ(data["setups"][0]["rejected"][0]["frf"], "2+Z / 1+Z");
 }
 
 TEST(Report, RendersInHeadlessChromium) {

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 
+using ema::model::EffectTarget;
+
 namespace ema::app {
 namespace {
 
@@ -91,15 +93,16 @@ TEST(RunHistory, DiagnosedMemberIsPlacedAtItsSpringEnds) {
   const fs::path model = kDir / "places.toml";
   std::ofstream(model) << kModel;
   const model::Model m = formats::ReadModelFile(model);
-  auto effect = [](model::EffectKind kind, const char* target) {
+  auto effect = [](model::EffectKind kind, const EffectTarget& target) {
     model::Effect e;
     e.kind = kind;
     e.target = target;
     return e;
   };
-  const json places = report::DiagnosedPlaces(
-      m, {effect(model::EffectKind::kStiffnessScale, "joints/J1"), effect(model::EffectKind::kAddedMass, "points:101"),
-          effect(model::EffectKind::kMassScale, "top")});
+  const json places =
+      report::DiagnosedPlaces(m, {effect(model::EffectKind::kStiffnessScale, EffectTarget::MemberOf("joints", "J1")),
+                                  effect(model::EffectKind::kAddedMass, EffectTarget::Points({101})),
+                                  effect(model::EffectKind::kMassScale, EffectTarget::Named("top"))});
   ASSERT_EQ(places.size(), 3u);
   EXPECT_EQ(places[0]["label"], "J1");
   // J1X and J1Z: end a at (0.1, 0, 0) each; end b is ground (not drawn).

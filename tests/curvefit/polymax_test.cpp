@@ -355,6 +355,39 @@ TEST(PolymaxInput, TooFewLinesForTheOrder) {
   }
 }
 
+// Every InputError of the fit is placed at its input, once: a stage's ("polymax: ...", "--select:
+// ...") and the data's own ("no FRF lines in the band ...") alike, so no caller has to look at an
+// error's text to know whether it still needs the file's name.
+TEST(PolymaxInput, EveryErrorOfTheFitNamesItsInputOnce) {
+  auto error_of = [](const FrfSet& frfs, const FitOptions& options) -> InputError {
+    try {
+      Fit(frfs, options, "x.unv");
+    } catch (const InputError& e) {
+      return e;
+    }
+    ADD_FAILURE() << "expected InputError";
+    return InputError("");
+  };
+  FitOptions stage;
+  stage.data.band_lo_hz = 40.0;
+  stage.data.band_hi_hz = 42.0;
+  stage.polymax.order_max = 40;
+  const InputError polymax = error_of(SmallSet(), stage);
+  EXPECT_EQ(polymax.Where(), "x.unv");
+  EXPECT_EQ(std::string(polymax.what()).rfind("x.unv: polymax: order 40", 0), 0u) << polymax.what();
+  FitOptions select;
+  select.select_frequencies_hz = {5.0};
+  const InputError selected = error_of(SmallSet(), select);
+  EXPECT_EQ(selected.Where(), "x.unv");
+  EXPECT_EQ(std::string(selected.what()).rfind("x.unv: --select: ", 0), 0u) << selected.what();
+  FitOptions band;
+  band.data.band_lo_hz = 200.0;
+  band.data.band_hi_hz = 300.0;
+  const InputError data = error_of(SmallSet(), band);
+  EXPECT_EQ(data.Where(), "x.unv");
+  EXPECT_EQ(std::string(data.what()).rfind("x.unv: no FRF lines in the band", 0), 0u) << data.what();
+}
+
 TEST(PolymaxInput, InconsistentReferences) {
   FrfSet frfs = SmallSet();
   frfs.references.push_back({9, 3});  // a reference without FRFs

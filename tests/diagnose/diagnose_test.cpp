@@ -17,6 +17,8 @@
 #include "ema/model/effects.hpp"
 #include "ema/model/solve.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::diagnose {
 namespace {
 
@@ -121,7 +123,7 @@ ModeSet NoisyTest(const Model& truth, const std::string& setup, unsigned seed, d
 }
 
 // True when `c` is the one effect `kind` on `target`.
-bool IsSingle(const Candidate& c, EffectKind kind, const std::string& target) {
+bool IsSingle(const Candidate& c, EffectKind kind, const EffectTarget& target) {
   return c.effects.size() == 1 && c.effects[0].kind == kind && c.effects[0].target == target;
 }
 
@@ -157,7 +159,8 @@ TEST_P(EachKind, RanksFirstWithItsParameter) {
   ASSERT_FALSE(d.candidates.empty());
   const Candidate& first = d.candidates.front();
   EXPECT_EQ(first.kind, model::KindName(kc.truth.kind)) << d.explanation;
-  EXPECT_EQ(first.target, kc.truth.target) << d.explanation;
+  ASSERT_EQ(first.effects.size(), 1u) << d.explanation;
+  EXPECT_EQ(first.effects[0].target, kc.truth.target) << d.explanation;
   EXPECT_NEAR(FittedValue(first, kc.parameter) / kc.value, 1.0, 0.05) << d.explanation;
   // The posterior σ is finite and small: 0.1 % frequency noise on 12 modes pins one parameter
   // to well under 5 %; the truth lies within 4σ of the fit (σ from the Laplace posterior).
@@ -170,7 +173,7 @@ TEST_P(EachKind, RanksFirstWithItsParameter) {
   EXPECT_LT(first.mean_abs_frequency_error_pct, 0.5);
 }
 
-Effect Make(EffectKind kind, const std::string& target, const std::string& key, double value) {
+Effect Make(EffectKind kind, const EffectTarget& target, const std::string& key, double value) {
   Effect e{kind, target, {{key, value}}, std::nullopt, 0};
   if (kind == EffectKind::kSeriesCompliance) {
     e.parameters.clear();
@@ -181,12 +184,14 @@ Effect Make(EffectKind kind, const std::string& target, const std::string& key, 
 
 INSTANTIATE_TEST_SUITE_P(
     Diagnose, EachKind,
-    ::testing::Values(KindCase{Make(EffectKind::kSeriesCompliance, "bearings", "k", 6.5e6), "k", 6.5e6, true},
-                      KindCase{Make(EffectKind::kStiffnessScale, "mounts", "factor", 0.6), "factor", 0.6, false},
-                      KindCase{Make(EffectKind::kOperatingPoint, "bearings", "value", 7.5e-6), "value", 7.5e-6, false},
-                      KindCase{Make(EffectKind::kAddedMass, "all_points", "mass", 0.03), "mass", 0.03, false},
-                      KindCase{Make(EffectKind::kMassScale, "carriage", "factor", 1.3), "factor", 1.3, false},
-                      KindCase{Make(EffectKind::kGroundSpring, "carriage", "k", 2e6), "k", 2e6, false}),
+    ::testing::Values(
+        KindCase{Make(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), "k", 6.5e6), "k", 6.5e6, true},
+        KindCase{Make(EffectKind::kStiffnessScale, EffectTarget::Named("mounts"), "factor", 0.6), "factor", 0.6, false},
+        KindCase{Make(EffectKind::kOperatingPoint, EffectTarget::Named("bearings"), "value", 7.5e-6), "value", 7.5e-6,
+                 false},
+        KindCase{Make(EffectKind::kAddedMass, EffectTarget::AllPoints(), "mass", 0.03), "mass", 0.03, false},
+        KindCase{Make(EffectKind::kMassScale, EffectTarget::Named("carriage"), "factor", 1.3), "factor", 1.3, false},
+        KindCase{Make(EffectKind::kGroundSpring, EffectTarget::Named("carriage"), "k", 2e6), "k", 2e6, false}),
     [](const auto& info) { return model::KindName(info.param.truth.kind); });
 
 TEST(Diagnose, PosteriorSigmaMatchesTheMonteCarloSpread) {
@@ -196,7 +201,8 @@ TEST(Diagnose, PosteriorSigmaMatchesTheMonteCarloSpread) {
   // the 40 fitted factors within ±35 % (the sample std of 40 values is itself uncertain by
   // ~11 %, and the Laplace σ is a local approximation), and no bias beyond 3 standard errors.
   const Model nominal = Guideway();
-  const Model truth = model::ApplyEffect(nominal, Make(EffectKind::kStiffnessScale, "mounts", "factor", 0.6));
+  const Model truth =
+      model::ApplyEffect(nominal, Make(EffectKind::kStiffnessScale, EffectTarget::Named("mounts"), "factor", 0.6));
   DiagnoseOptions options;
   options.max_effects = 1;
   options.members = false;
@@ -204,7 +210,7 @@ TEST(Diagnose, PosteriorSigmaMatchesTheMonteCarloSpread) {
   for (unsigned seed = 100; seed < 140; ++seed) {
     const Diagnosis d = Diagnose(nominal, {{"", NoisyTest(truth, "", seed)}}, options);
     for (const Candidate& c : d.candidates)
-      if (IsSingle(c, EffectKind::kStiffnessScale, "mounts")) {
+      if (IsSingle(c, EffectKind::kStiffnessScale, EffectTarget::Named("mounts"))) {
         values.push_back(c.parameters.front().value);
         sigmas.push_back(c.parameters.front().sigma);
         break;
@@ -242,7 +248,7 @@ TEST(Diagnose, TwoSetupsSeparateSeriesComplianceFromStiffnessScale) {
   // uniform stiffness factor on them; with two stud settings the compliance's share differs
   // (the film is stiffer at 5 µm than at 9 µm, and the gap shifts by a different amount).
   const Model nominal = Guideway("lateral");
-  const Effect truth_effect = Make(EffectKind::kSeriesCompliance, "bearings", "k", 6.5e6);
+  const Effect truth_effect = Make(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), "k", 6.5e6);
   const Model truth = model::ApplyEffect(nominal, truth_effect);
   DiagnoseOptions options;
   options.max_effects = 1;
@@ -255,7 +261,7 @@ TEST(Diagnose, TwoSetupsSeparateSeriesComplianceFromStiffnessScale) {
   EXPECT_EQ(a.target, "bearings");
   bool found = false;
   for (const Candidate& c : one.candidates)
-    if (IsSingle(c, EffectKind::kStiffnessScale, "bearings")) {
+    if (IsSingle(c, EffectKind::kStiffnessScale, EffectTarget::Named("bearings"))) {
       found = true;
       EXPECT_LT(std::abs(c.cost - a.cost), 1.0);  // same misfit within noise (cost is a χ²)
     }
@@ -273,7 +279,7 @@ TEST(Diagnose, TwoSetupsSeparateSeriesComplianceFromStiffnessScale) {
   // The stiffness scale now pays for not fitting both settings: well behind (> 10 in BIC,
   // "very strong" evidence).
   for (const Candidate& c : two.candidates)
-    if (IsSingle(c, EffectKind::kStiffnessScale, "bearings")) {
+    if (IsSingle(c, EffectKind::kStiffnessScale, EffectTarget::Named("bearings"))) {
       EXPECT_GT(c.score - best.score, 10.0);
     }
   EXPECT_TRUE(best.tied_with.empty()) << two.explanation;
@@ -283,8 +289,9 @@ TEST(Diagnose, PairReportedOnlyWhenItBeatsTheBestSingle) {
   // Truth with two effects: a pair must win; with one effect, no pair may be reported above it.
   Model nominal = Guideway();
   nominal.bodies[0].uncertainty = 0.5;  // an unweighed carriage: a 30 % mass error is plausible
-  Model truth = model::ApplyEffect(nominal, Make(EffectKind::kMassScale, "carriage", "factor", 1.3));
-  truth = model::ApplyEffect(truth, Make(EffectKind::kStiffnessScale, "mounts", "factor", 0.6));
+  Model truth =
+      model::ApplyEffect(nominal, Make(EffectKind::kMassScale, EffectTarget::Named("carriage"), "factor", 1.3));
+  truth = model::ApplyEffect(truth, Make(EffectKind::kStiffnessScale, EffectTarget::Named("mounts"), "factor", 0.6));
   const Diagnosis d = Diagnose(nominal, {{"", NoisyTest(truth, "", 41)}}, DiagnoseOptions{});
   const Candidate& first = d.candidates.front();
   ASSERT_EQ(first.effects.size(), 2u) << d.explanation;
@@ -309,7 +316,8 @@ TEST(Diagnose, PoorlyMeasuredModeWeighsLess) {
   // 3 % of f), that mode's residual is divided by its σ and barely pulls the fit; without the
   // spread it counts like every other mode and biases the factor.
   const Model nominal = Guideway();
-  const Model truth = model::ApplyEffect(nominal, Make(EffectKind::kStiffnessScale, "mounts", "factor", 0.6));
+  const Model truth =
+      model::ApplyEffect(nominal, Make(EffectKind::kStiffnessScale, EffectTarget::Named("mounts"), "factor", 0.6));
   ModeSet test = NoisyTest(truth, "", 61, 2e-4, 1e-2);
   test.modes[0].frequency_hz *= 1.03;
   DiagnoseOptions options;
@@ -325,7 +333,8 @@ TEST(Diagnose, PoorlyMeasuredModeWeighsLess) {
   EXPECT_NEAR(with_sigma / 0.6, 1.0, 0.01);
   double without_sigma = kNaN;
   for (const Candidate& c : unweighted.candidates)
-    if (IsSingle(c, EffectKind::kStiffnessScale, "mounts")) without_sigma = FittedValue(c, "factor");
+    if (IsSingle(c, EffectKind::kStiffnessScale, EffectTarget::Named("mounts")))
+      without_sigma = FittedValue(c, "factor");
   ASSERT_TRUE(std::isfinite(without_sigma));
   EXPECT_LT(std::abs(with_sigma - 0.6), std::abs(without_sigma - 0.6));
 }
@@ -381,7 +390,7 @@ TEST(Diagnose, PriorPullsTheFitTowardsTheModel) {
   Model nominal = Guideway();
   model::Effect truth_effect;
   truth_effect.kind = EffectKind::kMassScale;
-  truth_effect.target = "base";
+  truth_effect.target = EffectTarget::Named("base");
   truth_effect.parameters["factor"] = 1.04;
   const Model truth = model::ApplyEffect(nominal, truth_effect);
   const std::vector<SetupModes> tests = {{"stud-5um", NoisyTest(truth, "stud-5um", 11, 3e-4, 3e-3)},
@@ -395,7 +404,7 @@ TEST(Diagnose, PriorPullsTheFitTowardsTheModel) {
       if (b.name == "base") b.uncertainty = uncertainty;
     *out = Diagnose(m, tests, options);
     for (const Candidate& c : out->candidates)
-      if (IsSingle(c, EffectKind::kMassScale, "base")) {
+      if (IsSingle(c, EffectKind::kMassScale, EffectTarget::Named("base"))) {
         if (uncertainty > 0.1) sigma_data = c.parameters.front().sigma;
         return FittedValue(c, "factor");
       }
@@ -423,7 +432,8 @@ std::pair<Model, std::vector<SetupModes>> MountMBStifferThanItsRating() {
     s.member = x < 0 ? (y > 0 ? "MB" : "MA") : (y > 0 ? "MD" : "MC");
     if (s.member == "MB") s.uncertainty = 0.001;
   }
-  const Model truth = model::ApplyEffect(nominal, Make(EffectKind::kStiffnessScale, "mounts/MB", "factor", 1.3));
+  const Model truth = model::ApplyEffect(
+      nominal, Make(EffectKind::kStiffnessScale, EffectTarget::MemberOf("mounts", "MB"), "factor", 1.3));
   return {nominal, {{"stud-5um", NoisyTest(truth, "stud-5um", 31)}, {"stud-9um", NoisyTest(truth, "stud-9um", 32)}}};
 }
 
@@ -507,34 +517,37 @@ TEST(EffectProbabilities, SumOverTheCandidatesThatHoldEachEffect) {
   //   added_mass on points:* (single points): 0.4 + 0.3 = 0.7 (points:1,2 is not a single point)
   //   stiffness_scale on joints/*: 0.2 + 0.1 = 0.3, with joints/J1 0.2 and joints/J2 0.1 —
   //   counted once per candidate even where one candidate holds two members (J1 and J2 in #3).
-  auto effect = [](EffectKind kind, const std::string& target) {
+  auto effect = [](EffectKind kind, const EffectTarget& target) {
     Effect e;
     e.kind = kind;
     e.target = target;
     return e;
   };
   std::vector<Candidate> ranked(4);
-  ranked[0].effects = {effect(EffectKind::kSeriesCompliance, "bearings"), effect(EffectKind::kAddedMass, "points:101")};
-  ranked[1].effects = {effect(EffectKind::kSeriesCompliance, "bearings"), effect(EffectKind::kAddedMass, "points:102")};
-  ranked[2].effects = {effect(EffectKind::kSeriesCompliance, "bearings"),
-                       effect(EffectKind::kStiffnessScale, "joints/J1"),
-                       effect(EffectKind::kStiffnessScale, "joints/J2")};
-  ranked[3].effects = {effect(EffectKind::kStiffnessScale, "joints/J2"), effect(EffectKind::kAddedMass, "points:1,2")};
+  ranked[0].effects = {effect(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings")),
+                       effect(EffectKind::kAddedMass, EffectTarget::Points({101}))};
+  ranked[1].effects = {effect(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings")),
+                       effect(EffectKind::kAddedMass, EffectTarget::Points({102}))};
+  ranked[2].effects = {effect(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings")),
+                       effect(EffectKind::kStiffnessScale, EffectTarget::MemberOf("joints", "J1")),
+                       effect(EffectKind::kStiffnessScale, EffectTarget::MemberOf("joints", "J2"))};
+  ranked[3].effects = {effect(EffectKind::kStiffnessScale, EffectTarget::MemberOf("joints", "J2")),
+                       effect(EffectKind::kAddedMass, EffectTarget::Points({1, 2}))};
   const double p[] = {0.4, 0.3, 0.2, 0.1};
   for (int i = 0; i < 4; ++i) ranked[i].probability = p[i];
   const std::vector<EffectProbability> out = EffectProbabilities(ranked);
-  auto find = [&](EffectKind kind, const std::string& target) {
+  auto find = [&](EffectKind kind, const EffectTarget& target) {
     for (const auto& e : out)
       if (e.kind == kind && e.target == target) return e.probability;
     return -1.0;
   };
-  EXPECT_NEAR(find(EffectKind::kSeriesCompliance, "bearings"), 0.9, 1e-12);
-  EXPECT_NEAR(find(EffectKind::kAddedMass, "points:*"), 0.7, 1e-12);
-  EXPECT_NEAR(find(EffectKind::kAddedMass, "points:101"), 0.4, 1e-12);
-  EXPECT_NEAR(find(EffectKind::kAddedMass, "points:1,2"), 0.1, 1e-12);
-  EXPECT_NEAR(find(EffectKind::kStiffnessScale, "joints/*"), 0.3, 1e-12);
-  EXPECT_NEAR(find(EffectKind::kStiffnessScale, "joints/J1"), 0.2, 1e-12);
-  EXPECT_NEAR(find(EffectKind::kStiffnessScale, "joints/J2"), 0.3, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kSeriesCompliance, EffectTarget::Named("bearings")), 0.9, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kAddedMass, EffectTarget::EveryPoint()), 0.7, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kAddedMass, EffectTarget::Points({101})), 0.4, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kAddedMass, EffectTarget::Points({1, 2})), 0.1, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kStiffnessScale, EffectTarget::EveryMemberOf("joints")), 0.3, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kStiffnessScale, EffectTarget::MemberOf("joints", "J1")), 0.2, 1e-12);
+  EXPECT_NEAR(find(EffectKind::kStiffnessScale, EffectTarget::MemberOf("joints", "J2")), 0.3, 1e-12);
   ASSERT_FALSE(out.empty());
   for (size_t i = 1; i < out.size(); ++i) EXPECT_GE(out[i - 1].probability, out[i].probability) << "most probable first";
 }
@@ -544,12 +557,12 @@ TEST(EffectProbabilities, EqualProbabilitiesKeepTheOrderOfTheKindsNames) {
   // target (as when kinds were text), not in the vocabulary's order.
   Candidate c;
   c.probability = 1.0;
-  c.effects = {Effect{EffectKind::kSeriesCompliance, "bearings", {}, std::nullopt, 0},
-               Effect{EffectKind::kAddedMass, "points:101", {{"mass", 0.01}}, std::nullopt, 0},
-               Effect{EffectKind::kGroundSpring, "base", {{"k", 1e5}}, std::nullopt, 0}};
+  c.effects = {Effect{EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), {}, std::nullopt, 0},
+               Effect{EffectKind::kAddedMass, EffectTarget::Points({101}), {{"mass", 0.01}}, std::nullopt, 0},
+               Effect{EffectKind::kGroundSpring, EffectTarget::Named("base"), {{"k", 1e5}}, std::nullopt, 0}};
   const std::vector<EffectProbability> out = EffectProbabilities({c});
   std::vector<std::string> order;
-  for (const EffectProbability& e : out) order.push_back(model::KindName(e.kind) + " " + e.target);
+  for (const EffectProbability& e : out) order.push_back(model::KindName(e.kind) + " " + model::TargetText(e.target));
   EXPECT_EQ(order, (std::vector<std::string>{"added_mass points:*", "added_mass points:101", "ground_spring base",
                                              "series_compliance bearings"}));
 }

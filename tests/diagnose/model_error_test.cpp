@@ -11,6 +11,8 @@
 #include "ema/model/solve.hpp"
 #include "stack_truths.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::diagnose {
 namespace model_error_test {
 using model::EffectKind;
@@ -98,7 +100,8 @@ TEST(ModelError, AMassSpreadOverTheBodiesIsTheModelsErrorNotAnAddedMass) {
     ASSERT_FALSE(d.candidates.empty());
     const Candidate& first = d.candidates.front();
     bool point_mass = false;
-    for (const auto& e : first.effects) point_mass = point_mass || (e.kind == EffectKind::kAddedMass && e.target != "all_points");
+    for (const auto& e : first.effects)
+      point_mass = point_mass || (e.kind == EffectKind::kAddedMass && e.target != EffectTarget::AllPoints());
     if (point_mass) {
       ++invented;
       // Honest when it happens: a look-alike of the scatter, never a certainty.
@@ -120,7 +123,9 @@ TEST(ModelError, ExactFormKeepsTheExactAnswer) {
   // so the inferred model error is negligible (below the test's σ) and rank 1 is the mount, as
   // without model error.
   const Model nominal = Stack();
-  const Model truth = model::ApplyEffect(nominal, {EffectKind::kStiffnessScale, "mounts/M2", {{"factor", 0.6}}, std::nullopt, 0});
+  const Model truth = model::ApplyEffect(
+      nominal,
+      {EffectKind::kStiffnessScale, EffectTarget::MemberOf("mounts", "M2"), {{"factor", 0.6}}, std::nullopt, 0});
   DiagnoseOptions options;
   options.max_effects = 1;
   const Diagnosis d = Diagnose(nominal, {{"", Measured(truth, 7)}}, options);

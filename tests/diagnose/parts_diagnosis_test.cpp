@@ -17,6 +17,8 @@
 #include "ema/model/solve.hpp"
 #include "model/fe_frame.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::diagnose {
 namespace {
 
@@ -82,7 +84,9 @@ TEST(PartsDiagnosis, OneMemberPartSoftenedRanksFirstWithItsFactor) {
   const model::Model nominal = formats::ReadModelFile(Frame().model);
   ASSERT_GE(Frame().dofs, 900);
   ASSERT_GE(Frame().parts, 15);
-  const ModeSet test = Measure(WithEffects({{EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.3}}, {}, 0}}), 6, 1e-3, 1);
+  const ModeSet test = Measure(
+      WithEffects({{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.3}}, {}, 0}}),
+      6, 1e-3, 1);
   const Diagnosis d = Diagnose(nominal, {{"", test}});
   const Candidate& first = d.candidates.front();
   ASSERT_EQ(first.effects.size(), 1u) << d.explanation;
@@ -100,7 +104,9 @@ TEST(PartsDiagnosis, OneMemberPartSoftenedRanksFirstWithItsFactor) {
 
 TEST(PartsDiagnosis, OneGroupSoftenedRanksFirst) {
   const model::Model nominal = formats::ReadModelFile(Frame().model);
-  const ModeSet test = Measure(WithEffects({{EffectKind::kStiffnessScale, "girders", {{"factor", 0.6}}, {}, 0}}), 6, 1e-3, 2);
+  const ModeSet test =
+      Measure(WithEffects({{EffectKind::kStiffnessScale, EffectTarget::Named("girders"), {{"factor", 0.6}}, {}, 0}}), 6,
+              1e-3, 2);
   const Diagnosis d = Diagnose(nominal, {{"", test}});
   const Candidate& first = d.candidates.front();
   ASSERT_EQ(first.effects.size(), 1u) << d.explanation;
@@ -111,9 +117,10 @@ TEST(PartsDiagnosis, OneGroupSoftenedRanksFirst) {
 
 TEST(PartsDiagnosis, APartPlusAnAddedMass) {
   const model::Model nominal = formats::ReadModelFile(Frame().model);
-  const ModeSet test = Measure(WithEffects({{EffectKind::kStiffnessScale, "bearings", {{"factor", 0.05}}, {}, 0},
-                                            {EffectKind::kAddedMass, "points:1040", {{"mass", 150.0}}, {}, 0}}),
-                               6, 5e-4, 3);
+  const ModeSet test =
+      Measure(WithEffects({{EffectKind::kStiffnessScale, EffectTarget::Named("bearings"), {{"factor", 0.05}}, {}, 0},
+                           {EffectKind::kAddedMass, EffectTarget::Points({1040}), {{"mass", 150.0}}, {}, 0}}),
+              6, 5e-4, 3);
   const Diagnosis d = Diagnose(nominal, {{"", test}});
   const Candidate& first = d.candidates.front();
   ASSERT_EQ(first.effects.size(), 2u) << d.explanation;

@@ -26,6 +26,8 @@
 #include "ema/model/effects.hpp"
 #include "ema/model/solve.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::diagnose {
 namespace {
 
@@ -104,7 +106,8 @@ void ExpectTheTruthAlone(const Diagnosis& d) {
 
 TEST(TestModeQuality, BlendsOfRepeatedRootsAreJudgedAgainstTheirSpan) {
   const Model nominal = Table();
-  const Model truth = model::ApplyEffect(nominal, {EffectKind::kStiffnessScale, "mounts", {{"factor", 0.6}}, std::nullopt, 0});
+  const Model truth = model::ApplyEffect(
+      nominal, {EffectKind::kStiffnessScale, EffectTarget::Named("mounts"), {{"factor", 0.6}}, std::nullopt, 0});
   ModeSet test = Noisy(truth, 11);
   const auto pairs = ClosePairs(test);
   ASSERT_GE(pairs.size(), 1u) << "the table must have a repeated root for this test";
@@ -125,7 +128,9 @@ TEST(TestModeQuality, AComplexShapeDoesNotBuySpuriousEffects) {
   // 2 % noise. Weighed as a 1 % shape, that mode bought a second ground spring (on the base).
   const fs::path file = fs::path(EMA_SOURCE_DIR) / "tests/diagnose/data/benchmark-stack3.toml";
   const Model nominal = formats::ReadModelFile(file);
-  const Model truth = model::ApplyEffect(nominal, {EffectKind::kGroundSpring, "middle", {{"k", 3826524.5447497265}}, std::nullopt, 0});
+  const Model truth = model::ApplyEffect(
+      nominal,
+      {EffectKind::kGroundSpring, EffectTarget::Named("middle"), {{"k", 3826524.5447497265}}, std::nullopt, 0});
   const ModeSet clean = Noisy(truth, 12);
   ASSERT_GE(clean.modes.size(), 8u);
   ASSERT_LT(clean.modes[1].frequency_hz / clean.modes[0].frequency_hz - 1.0, 0.02);
@@ -152,8 +157,10 @@ TEST(SearchSwap, ALookAlikeInTheBestSetIsSwappedForTheTruth) {
   // look-alikes and dropping the rest finds the truth.
   const fs::path file = fs::path(EMA_SOURCE_DIR) / "tests/diagnose/data/benchmark-stack2.toml";
   const Model nominal = formats::ReadModelFile(file);
-  Model truth = model::ApplyEffect(nominal, {EffectKind::kGroundSpring, "base", {{"k", 3750979.8508189674}}, std::nullopt, 0});
-  truth = model::ApplyEffect(truth, {EffectKind::kAddedMass, "points:104", {{"mass", 0.542521313540122}}, std::nullopt, 0});
+  Model truth = model::ApplyEffect(
+      nominal, {EffectKind::kGroundSpring, EffectTarget::Named("base"), {{"k", 3750979.8508189674}}, std::nullopt, 0});
+  truth = model::ApplyEffect(
+      truth, {EffectKind::kAddedMass, EffectTarget::Points({104}), {{"mass", 0.542521313540122}}, std::nullopt, 0});
   const Diagnosis d = Diagnose(nominal, {{"", Noisy(truth, 1)}});
   ASSERT_FALSE(d.candidates.empty());
   const Candidate& first = d.candidates.front();

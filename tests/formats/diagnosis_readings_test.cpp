@@ -52,7 +52,7 @@ diagnose::Diagnosis SmallDiagnosis() {
   linear.probability = 0.625;
   model::Effect compliance;
   compliance.kind = model::EffectKind::kSeriesCompliance;
-  compliance.target = "joints/J3";
+  compliance.target = model::EffectTarget::MemberOf("joints", "J3");
   compliance.parameters["k"] = 6.5e6;
   compliance.law = model::LinearLaw{6.5e6};
   linear.effects = {compliance};
@@ -69,11 +69,11 @@ diagnose::Diagnosis SmallDiagnosis() {
   two.probability = 0.125;
   model::Effect contact;
   contact.kind = model::EffectKind::kSeriesCompliance;
-  contact.target = "bearings";
+  contact.target = model::EffectTarget::Named("bearings");
   contact.law = HertzInSeries();
   model::Effect scale;
   scale.kind = model::EffectKind::kStiffnessScale;
-  scale.target = "mounts";
+  scale.target = model::EffectTarget::Named("mounts");
   scale.parameters["factor"] = 1.0 / 3.0;
   two.effects = {contact, scale};
 
@@ -154,6 +154,7 @@ TEST(DiagnosisReadings, LiteralJsonSortedByRankWithLawTextAndCurveFile) {
   EXPECT_EQ(r[1].target, "");
   EXPECT_TRUE(r[1].effects.empty());
   ASSERT_EQ(r[0].effects.size(), 1u);
+  EXPECT_EQ(r[0].effects[0].target, model::EffectTarget::Named("joints"));
   EXPECT_EQ(r[0].effects[0].parameters, (std::map<std::string, double>{{"k", 6.5e6}}));
   ASSERT_TRUE(r[0].effects[0].law);
   EXPECT_EQ(LawToToml(*r[0].effects[0].law), LawToToml(model::LinearLaw{6.5e6}));
@@ -163,6 +164,7 @@ TEST(DiagnosisReadings, LiteralJsonSortedByRankWithLawTextAndCurveFile) {
   EXPECT_EQ(table.deflection, (std::vector<double>{0.0, 1e-6, 2e-6}));
   EXPECT_EQ(table.force, (std::vector<double>{0.0, 10.0, 30.0}));
   EXPECT_EQ(table.operating_deflection, 1.5e-6);
+  EXPECT_EQ(r[3].effects[0].target, model::EffectTarget::Points({101}));
   EXPECT_EQ(r[3].effects[0].parameters.at("mass"), 3.0);  // a JSON integer
 }
 

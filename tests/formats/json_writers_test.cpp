@@ -79,7 +79,7 @@ diagnose::Candidate LabelledCandidate() {
   diagnose::Candidate c;
   model::Effect e;
   e.kind = model::EffectKind::kStiffnessScale;  // typed: written by its name from the table
-  e.target = kOverlong;
+  e.target = model::EffectTarget::Named(kOverlong);
   e.parameters[kLatin1] = kNaN;
   e.law = model::LinearLaw{kInf};
   c.effects = {e};
@@ -174,7 +174,7 @@ TEST(JsonWriters, EveryCodecWritesValidJsonForNonUtf8LabelsAndNonFiniteNumbers) 
   d.baseline = candidate;
   d.candidates = {candidate, candidate};
   d.steps = {{kLatin1, kNaN, kInf, -kInf}};
-  d.effect_probabilities = {{model::EffectKind::kStiffnessScale, kOverlong, kNaN}};
+  d.effect_probabilities = {{model::EffectKind::kStiffnessScale, model::EffectTarget::Named(kOverlong), kNaN}};
   d.groups = {{kLatin1, kNul, {1, 2}, kInf}};
   d.explanation = kLatin1;
   const json diagnosis = DumpAndParse(DiagnosisJson(d, {}));

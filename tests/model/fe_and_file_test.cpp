@@ -11,6 +11,8 @@
 #include "ema/model/solve.hpp"
 #include "test_util.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::model {
 namespace {
 
@@ -262,9 +264,9 @@ TEST(ModelFile, WriteWithEffectsKeepsFileAndRoundTrips) {
   const fs::path dir = testing::TempDir("file_effects");
   const fs::path in = WriteCarriage(dir);
   const fs::path out = dir / "updated.toml";
-  Effect series{EffectKind::kSeriesCompliance, "bearings", {}, Law(LinearLaw{6.5e6}), 0};
-  Effect scale{EffectKind::kMassScale, "carriage", {{"factor", 1.0625}}, std::nullopt, 0};
-  Effect fitted{EffectKind::kSeriesCompliance, "bearings", {{"k", 3.25e7}}, std::nullopt, 0};
+  Effect series{EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), {}, Law(LinearLaw{6.5e6}), 0};
+  Effect scale{EffectKind::kMassScale, EffectTarget::Named("carriage"), {{"factor", 1.0625}}, std::nullopt, 0};
+  Effect fitted{EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), {{"k", 3.25e7}}, std::nullopt, 0};
   formats::WriteModelWithEffects(in, out, {series, scale, fitted});
   std::ifstream a(in), b(out);
   const std::string original((std::istreambuf_iterator<char>(a)), {}), updated((std::istreambuf_iterator<char>(b)), {});
@@ -287,7 +289,7 @@ TEST(ModelFile, WrittenElsewhereRewritesRelativePathsAndLoads) {
   const fs::path in = WriteCarriage(dir);
   const fs::path out = dir / "deeper" / "still" / "updated.toml";
   fs::create_directories(out.parent_path());
-  Effect scale{EffectKind::kMassScale, "carriage", {{"factor", 1.0625}}, std::nullopt, 0};
+  Effect scale{EffectKind::kMassScale, EffectTarget::Named("carriage"), {{"factor", 1.0625}}, std::nullopt, 0};
   formats::WriteModelWithEffects(in, out, {scale});
   std::ifstream b(out);
   const std::string updated((std::istreambuf_iterator<char>(b)), {});

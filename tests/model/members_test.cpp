@@ -11,6 +11,8 @@
 #include "ema/model/solve.hpp"
 #include "test_util.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::model {
 namespace {
 
@@ -56,19 +58,19 @@ Model Joints() {
 TEST(Members, SameTwoPointsFormOneMemberNamedByCommonPrefix) {
   const std::vector<Member> members = Members(Joints());
   ASSERT_EQ(members.size(), 7u);
-  EXPECT_EQ(members[0].Target(), "joints/J1");
+  EXPECT_EQ(members[0].Target(), EffectTarget::MemberOf("joints", "J1"));
   EXPECT_EQ(members[0].springs, (std::vector<int>{0, 1}));
-  EXPECT_EQ(members[1].Target(), "joints/J2");
+  EXPECT_EQ(members[1].Target(), EffectTarget::MemberOf("joints", "J2"));
   // "bolt" and "stud" share no prefix: the first spring's name.
-  EXPECT_EQ(members[2].Target(), "joints/bolt");
+  EXPECT_EQ(members[2].Target(), EffectTarget::MemberOf("joints", "bolt"));
   EXPECT_EQ(members[2].springs, (std::vector<int>{4, 5}));
   // Single springs keep their own name; "lat"+"laty" share the prefix "lat".
-  EXPECT_EQ(members[3].Target(), "mounts/MZ1");
-  EXPECT_EQ(members[4].Target(), "mounts/MZ2");
-  EXPECT_EQ(members[5].Target(), "mounts/lat");
+  EXPECT_EQ(members[3].Target(), EffectTarget::MemberOf("mounts", "MZ1"));
+  EXPECT_EQ(members[4].Target(), EffectTarget::MemberOf("mounts", "MZ2"));
+  EXPECT_EQ(members[5].Target(), EffectTarget::MemberOf("mounts", "lat"));
   EXPECT_EQ(members[5].springs, (std::vector<int>{8, 9}));
   // "torsion" sits at its own point: a member of its own.
-  EXPECT_EQ(members[6].Target(), "mounts/torsion");
+  EXPECT_EQ(members[6].Target(), EffectTarget::MemberOf("mounts", "torsion"));
 }
 
 TEST(Members, ExplicitMemberKeyWinsAndPrefixCollisionsFallBackToTheFirstName) {
@@ -84,26 +86,32 @@ TEST(Members, ExplicitMemberKeyWinsAndPrefixCollisionsFallBackToTheFirstName) {
   m.springs[8].member = "anchor";  // "lat" in mounts: another group, so another member
   const std::vector<Member> members = Members(m);
   std::vector<std::string> names;
-  for (const Member& x : members) names.push_back(x.Target());
+  for (const Member& x : members) names.push_back(TargetText(x.Target()));
   // JAX+JAY → prefix "JA"; JAX2+JAY2 → prefix "JA" too: both fall back to the first spring's name.
   EXPECT_EQ(names[0], "joints/JAX");
   EXPECT_EQ(names[1], "joints/JAX2");
   EXPECT_NE(std::find(names.begin(), names.end(), "joints/anchor"), names.end());
   EXPECT_NE(std::find(names.begin(), names.end(), "mounts/anchor"), names.end());
-  EXPECT_EQ(TargetSprings(m, "joints/anchor"), std::vector<int>{4});
+  EXPECT_EQ(TargetSprings(m, EffectTarget::MemberOf("joints", "anchor")), std::vector<int>{4});
 }
 
 TEST(Members, MemberEffectChangesOnlyThatMember) {
   const Model m = Joints();
-  const Model scaled = ApplyEffect(m, Effect{EffectKind::kStiffnessScale, "joints/J2", {{"factor", 0.25}}, std::nullopt, 0});
+  const Model scaled = ApplyEffect(
+      m,
+      Effect{EffectKind::kStiffnessScale, EffectTarget::MemberOf("joints", "J2"), {{"factor", 0.25}}, std::nullopt, 0});
   for (size_t i = 0; i < m.springs.size(); ++i)
     EXPECT_DOUBLE_EQ(scaled.springs[i].stiffness_factor, (i == 2 || i == 3) ? 0.25 : 1.0) << m.springs[i].name;
-  const Model series = ApplyEffect(m, Effect{EffectKind::kSeriesCompliance, "joints/J1", {{"k", 1e7}}, std::nullopt, 0});
+  const Model series = ApplyEffect(
+      m, Effect{EffectKind::kSeriesCompliance, EffectTarget::MemberOf("joints", "J1"), {{"k", 1e7}}, std::nullopt, 0});
   // Two 1e7 springs in series: 5e6 for J1's springs, unchanged elsewhere.
   EXPECT_NEAR(LinearizeLaw(series.springs[0].law, "J1X").stiffness, 5e6, 1e-3);
   EXPECT_NEAR(LinearizeLaw(series.springs[2].law, "J2X").stiffness, 1e7, 1e-3);
   try {
-    ApplyEffect(m, Effect{EffectKind::kStiffnessScale, "joints/J9", {{"factor", 0.5}}, std::nullopt, 0});
+    ApplyEffect(
+        m,
+        Effect{
+            EffectKind::kStiffnessScale, EffectTarget::MemberOf("joints", "J9"), {{"factor", 0.5}}, std::nullopt, 0});
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no member 'J9' in group 'joints' (members: J1, J2, bolt)"), std::string::npos)
@@ -168,7 +176,7 @@ added_mass = 0.01
   EXPECT_DOUBLE_EQ(m.bodies[0].uncertainty, 0.02);
   EXPECT_DOUBLE_EQ(m.springs[0].uncertainty, 0.5);
   EXPECT_EQ(m.springs[0].member, "pad-1");
-  EXPECT_EQ(Members(m).front().Target(), "bearings/pad-1");
+  EXPECT_EQ(Members(m).front().Target(), EffectTarget::MemberOf("bearings", "pad-1"));
   EXPECT_DOUBLE_EQ(m.priors.at(EffectKind::kMassScale), 0.1);
   EXPECT_DOUBLE_EQ(m.priors.at(EffectKind::kAddedMass), 0.01);
   EXPECT_EQ(m.priors.count(EffectKind::kStiffnessScale), 0u);

@@ -14,6 +14,8 @@
 #include "fe_frame.hpp"
 #include "test_util.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::model {
 namespace {
 
@@ -93,25 +95,28 @@ TEST_F(FrameParts, StiffnessScaleTargetsAMemberAGroupAndALonePart) {
     ADD_FAILURE() << "no part " << name;
     return Eigen::MatrixXd();
   };
-  const Eigen::MatrixXd member =
-      DenseK(ApplyEffect(m, {EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.3}}, {}, 0}));
+  const Eigen::MatrixXd member = DenseK(
+      ApplyEffect(m, {EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.3}}, {}, 0}));
   EXPECT_LT((member - (k0 - 0.7 * part_k("G3"))).norm(), 1e-12 * k0.norm());
   Eigen::MatrixXd cross = Eigen::MatrixXd::Zero(k0.rows(), k0.cols());
   for (const char* x : {"X1", "X2", "X3", "X4"}) cross += part_k(x);
-  const Eigen::MatrixXd group = DenseK(ApplyEffect(m, {EffectKind::kStiffnessScale, "cross", {{"factor", 0.6}}, {}, 0}));
+  const Eigen::MatrixXd group =
+      DenseK(ApplyEffect(m, {EffectKind::kStiffnessScale, EffectTarget::Named("cross"), {{"factor", 0.6}}, {}, 0}));
   EXPECT_LT((group - (k0 - 0.4 * cross)).norm(), 1e-12 * k0.norm());
-  const Eigen::MatrixXd lone = DenseK(ApplyEffect(m, {EffectKind::kStiffnessScale, "deck", {{"factor", 2.0}}, {}, 0}));
+  const Eigen::MatrixXd lone =
+      DenseK(ApplyEffect(m, {EffectKind::kStiffnessScale, EffectTarget::Named("deck"), {{"factor", 2.0}}, {}, 0}));
   EXPECT_LT((lone - (k0 + part_k("deck"))).norm(), 1e-12 * k0.norm());
   // A target that names nothing lists the targets there are.
   try {
-    ApplyEffect(m, {EffectKind::kStiffnessScale, "girders/G9", {{"factor", 0.5}}, {}, 0});
+    ApplyEffect(m, {EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G9"), {{"factor", 0.5}}, {}, 0});
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no part 'G9' in part group 'girders' (members: G1, G2"), std::string::npos)
         << e.what();
   }
   // Girders carry no mass.
-  EXPECT_THROW(ApplyEffect(m, {EffectKind::kMassScale, "girders", {{"factor", 0.5}}, {}, 0}), InputError);
+  EXPECT_THROW(ApplyEffect(m, {EffectKind::kMassScale, EffectTarget::Named("girders"), {{"factor", 0.5}}, {}, 0}),
+               InputError);
 }
 
 // The reduced model: the base's modes and each probe's static responses (first and second order)
@@ -126,12 +131,12 @@ TEST_F(FrameParts, ReducedModelMatchesFullSolves) {
   ro.modes = 20;
   ro.enriched_modes = 10;
   const ReducedModelFactory factory(m, so, ro);
-  const Effect probe{EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.5}}, {}, 0};
+  const Effect probe{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.5}}, {}, 0};
   const auto reduced = factory.Make({{probe}});
   EXPECT_GT(reduced->BasisSize(), 20);
   EXPECT_LE(reduced->BasisSize(), 40);  // 20 modes + 2 x 10 responses
   for (double factor : {1.0, 0.6, 0.05}) {
-    const Effect e{EffectKind::kStiffnessScale, "girders/G3", {{"factor", factor}}, {}, 0};
+    const Effect e{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", factor}}, {}, 0};
     const std::vector<double> full = Frequencies(Solve(ApplyEffect(m, e), so));
     const std::vector<double> approx = Frequencies(reduced->Solve(ApplyEffect(factory.Skeleton(), e), so));
     ASSERT_EQ(full.size(), approx.size());
@@ -161,17 +166,18 @@ TEST_F(FrameParts, ReducedModelSolvesAChangedModelWithoutItsDofMap) {
   ro.modes = 20;
   ro.enriched_modes = 10;
   const ReducedModelFactory factory(m, so, ro);
-  const std::string point = "points:" + std::to_string(m.points.at(3).id);
+  const EffectTarget point = EffectTarget::Points({m.points.at(3).id});
   const Effect mass{EffectKind::kAddedMass, point, {{"mass", 2.0}}, {}, 0};
-  const Effect girder{EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.7}}, {}, 0};
+  const Effect girder{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.7}}, {}, 0};
   const auto reduced = factory.Make({{mass}, {girder}});
   SolveOptions with_sensors = so;
   for (const TestPoint& p : m.points) with_sensors.extra_masses.push_back({"sensor", p.where, 0.5, 0});
   Model lean = factory.Skeleton();
   lean.fe.dofs.clear();
   lean.fe.node_positions.clear();
-  const std::vector<Effect> effects{{EffectKind::kAddedMass, point, {{"mass", 1.5}}, {}, 0},
-                                    {EffectKind::kStiffnessScale, "girders/G3", {{"factor", 0.8}}, {}, 0}};
+  const std::vector<Effect> effects{
+      {EffectKind::kAddedMass, point, {{"mass", 1.5}}, {}, 0},
+      {EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.8}}, {}, 0}};
   Model with_map = factory.Skeleton();
   for (const Effect& e : effects) lean = ApplyEffect(lean, e), with_map = ApplyEffect(with_map, e);
   const std::vector<double> a = Frequencies(reduced->Solve(lean, with_sensors));
@@ -192,11 +198,13 @@ TEST_F(FrameParts, ReducedModelSolvesAChangedModelWithoutItsDofMap) {
 TEST_F(FrameParts, WrittenModelLoadsFromAnotherFolder) {
   const fs::path elsewhere = testing::TempDir("frame-parts-elsewhere") / "sub" / "updated.toml";
   fs::create_directories(elsewhere.parent_path());
-  formats::WriteModelWithEffects(files_->model, elsewhere,
-                                 {{EffectKind::kStiffnessScale, "girders/G2", {{"factor", 0.5}}, {}, 0}});
+  formats::WriteModelWithEffects(
+      files_->model, elsewhere,
+      {{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G2"), {{"factor", 0.5}}, {}, 0}});
   const Model written = formats::ReadModelFile(elsewhere);
   const Model here =
-      ApplyEffect(formats::ReadModelFile(files_->model), {EffectKind::kStiffnessScale, "girders/G2", {{"factor", 0.5}}, {}, 0});
+      ApplyEffect(formats::ReadModelFile(files_->model),
+                  {EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G2"), {{"factor", 0.5}}, {}, 0});
   SolveOptions so;
   so.max_modes = 6;
   const std::vector<double> a = Frequencies(Solve(written, so)), b = Frequencies(Solve(here, so));
@@ -210,7 +218,7 @@ TEST_F(FrameParts, WrittenModelCopiedElsewhereLoadsTheSame) {
   const fs::path root = testing::TempDir("frame-parts-copied");
   const fs::path written = root / "out" / "updated.toml";
   fs::create_directories(written.parent_path());
-  const Effect loose{EffectKind::kStiffnessScale, "girders/G2", {{"factor", 0.5}}, {}, 0};
+  const Effect loose{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G2"), {{"factor", 0.5}}, {}, 0};
   formats::WriteModelWithEffects(files_->model, written, {loose});
   const fs::path copied = root / "a" / "b" / "c" / "copy.toml";
   fs::create_directories(copied.parent_path());
@@ -229,7 +237,7 @@ TEST_F(FrameParts, BundledModelTravelsWithItsFolder) {
   const fs::path root = testing::TempDir("frame-parts-bundled");
   const fs::path out = root / "send" / "updated.toml";
   fs::create_directories(out.parent_path());
-  const Effect loose{EffectKind::kStiffnessScale, "girders/G2", {{"factor", 0.5}}, {}, 0};
+  const Effect loose{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G2"), {{"factor", 0.5}}, {}, 0};
   formats::ModelWriteOptions bundle;
   bundle.bundle = true;
   formats::WriteModelWithEffects(files_->model, out, {loose}, bundle);

@@ -9,6 +9,8 @@
 #include "ema/model/solve.hpp"
 #include "test_util.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::model {
 namespace {
 
@@ -106,7 +108,8 @@ Eigen::MatrixXd Dense(const Eigen::SparseMatrix<double>& a) { return Eigen::Matr
 
 TEST(Effects, StiffnessScaleScalesGroupStiffness) {
   const Model m = OneBody();
-  const Model e = ApplyEffect(m, Effect{EffectKind::kStiffnessScale, "bearings", {{"factor", 1.5}}, std::nullopt, 0});
+  const Model e = ApplyEffect(
+      m, Effect{EffectKind::kStiffnessScale, EffectTarget::Named("bearings"), {{"factor", 1.5}}, std::nullopt, 0});
   const Eigen::VectorXd g = SpringRow(Eigen::Vector3d(0.1, 0.05, 0.0), Eigen::Vector3d::UnitZ());
   const Eigen::MatrixXd dk = Dense(Assemble(e).stiffness) - Dense(Assemble(m).stiffness);
   EXPECT_LT((dk - 0.5 * 2e6 * g * g.transpose()).cwiseAbs().maxCoeff(), 1e-6);
@@ -114,7 +117,8 @@ TEST(Effects, StiffnessScaleScalesGroupStiffness) {
 
 TEST(Effects, SeriesComplianceGivesSeriesStiffness) {
   const Model m = OneBody();
-  const Model e = ApplyEffect(m, Effect{EffectKind::kSeriesCompliance, "bearings", {}, Law(LinearLaw{6e6}), 0});
+  const Model e = ApplyEffect(
+      m, Effect{EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), {}, Law(LinearLaw{6e6}), 0});
   const double k_new = 1.0 / (1.0 / 2e6 + 1.0 / 6e6);
   const Eigen::VectorXd g = SpringRow(Eigen::Vector3d(0.1, 0.05, 0.0), Eigen::Vector3d::UnitZ());
   const Eigen::MatrixXd dk = Dense(Assemble(e).stiffness) - Dense(Assemble(m).stiffness);
@@ -124,8 +128,10 @@ TEST(Effects, SeriesComplianceGivesSeriesStiffness) {
 
 TEST(Effects, SeriesComplianceAcceptsKParameterAsLinearLaw) {
   const Model m = OneBody();
-  const Model by_law = ApplyEffect(m, Effect{EffectKind::kSeriesCompliance, "bearings", {}, Law(LinearLaw{6e6}), 0});
-  const Model by_k = ApplyEffect(m, Effect{EffectKind::kSeriesCompliance, "bearings", {{"k", 6e6}}, std::nullopt, 0});
+  const Model by_law = ApplyEffect(
+      m, Effect{EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), {}, Law(LinearLaw{6e6}), 0});
+  const Model by_k = ApplyEffect(
+      m, Effect{EffectKind::kSeriesCompliance, EffectTarget::Named("bearings"), {{"k", 6e6}}, std::nullopt, 0});
   EXPECT_DOUBLE_EQ(Assemble(by_k).springs[0].stiffness, Assemble(by_law).springs[0].stiffness);
 }
 
@@ -136,16 +142,21 @@ TEST(Effects, OperatingPointMovesTheAirGap) {
   film.load = {400.0, 250.0, 160.0, 100.0};
   film.operating_gap = 4e-6;
   m.springs[0].law = film;
-  const Model e = ApplyEffect(m, Effect{EffectKind::kOperatingPoint, "bearings", {{"value", 6e-6}}, std::nullopt, 0});
+  const Model e = ApplyEffect(
+      m, Effect{EffectKind::kOperatingPoint, EffectTarget::Named("bearings"), {{"value", 6e-6}}, std::nullopt, 0});
   const SpringState direct = LinearizeLaw(film, "t", 6e-6);
   EXPECT_DOUBLE_EQ(Assemble(e).springs[0].stiffness, direct.stiffness);
-  EXPECT_THROW(ApplyEffect(m, Effect{EffectKind::kOperatingPoint, "mounts", {{"value", 1.0}}, std::nullopt, 0}), InputError)
+  EXPECT_THROW(
+      ApplyEffect(
+          m, Effect{EffectKind::kOperatingPoint, EffectTarget::Named("mounts"), {{"value", 1.0}}, std::nullopt, 0}),
+      InputError)
       << "a linear-only group has no operating point";
 }
 
 TEST(Effects, AddedMassAtPointIsRigidBodyMassMatrixOfThePoint) {
   const Model m = OneBody();
-  const Model e = ApplyEffect(m, Effect{EffectKind::kAddedMass, "points:101", {{"mass", 0.02}}, std::nullopt, 0});
+  const Model e =
+      ApplyEffect(m, Effect{EffectKind::kAddedMass, EffectTarget::Points({101}), {{"mass", 0.02}}, std::nullopt, 0});
   const Eigen::Vector3d r = Eigen::Vector3d(0.3, 0.1, 0.05) - Eigen::Vector3d(0.1, 0, 0);
   Eigen::MatrixXd t(3, 6);  // u = [I, -[r]x] q
   Eigen::Matrix3d rx;
@@ -153,14 +164,18 @@ TEST(Effects, AddedMassAtPointIsRigidBodyMassMatrixOfThePoint) {
   t << Eigen::Matrix3d::Identity(), -rx;
   const Eigen::MatrixXd dm = Dense(Assemble(e).mass) - Dense(Assemble(m).mass);
   EXPECT_LT((dm - 0.02 * t.transpose() * t).cwiseAbs().maxCoeff(), 1e-15);
-  const Model all = ApplyEffect(m, Effect{EffectKind::kAddedMass, "all_points", {{"mass", 0.02}}, std::nullopt, 0});
+  const Model all =
+      ApplyEffect(m, Effect{EffectKind::kAddedMass, EffectTarget::AllPoints(), {{"mass", 0.02}}, std::nullopt, 0});
   EXPECT_LT((Dense(Assemble(all).mass) - Dense(Assemble(e).mass)).cwiseAbs().maxCoeff(), 1e-15);
-  EXPECT_THROW(ApplyEffect(m, Effect{EffectKind::kAddedMass, "points:999", {{"mass", 0.02}}, std::nullopt, 0}), InputError);
+  EXPECT_THROW(
+      ApplyEffect(m, Effect{EffectKind::kAddedMass, EffectTarget::Points({999}), {{"mass", 0.02}}, std::nullopt, 0}),
+      InputError);
 }
 
 TEST(Effects, MassScaleScalesBodyMassAndInertia) {
   const Model m = OneBody();
-  const Model e = ApplyEffect(m, Effect{EffectKind::kMassScale, "c", {{"factor", 1.2}}, std::nullopt, 0});
+  const Model e =
+      ApplyEffect(m, Effect{EffectKind::kMassScale, EffectTarget::Named("c"), {{"factor", 1.2}}, std::nullopt, 0});
   EXPECT_LT((Dense(Assemble(e).mass) - 1.2 * Dense(Assemble(m).mass)).cwiseAbs().maxCoeff(), 1e-15);
   // Frequencies scale with 1/sqrt(factor).
   const double f0 = Solve(m).modes.modes[0].frequency_hz, f1 = Solve(e).modes.modes[0].frequency_hz;
@@ -169,7 +184,8 @@ TEST(Effects, MassScaleScalesBodyMassAndInertia) {
 
 TEST(Effects, GroundSpringAddsTranslationalStiffnessAtCentre) {
   const Model m = OneBody();
-  const Model e = ApplyEffect(m, Effect{EffectKind::kGroundSpring, "c", {{"k", 5e4}}, std::nullopt, 0});
+  const Model e =
+      ApplyEffect(m, Effect{EffectKind::kGroundSpring, EffectTarget::Named("c"), {{"k", 5e4}}, std::nullopt, 0});
   Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(6, 6);
   expected.topLeftCorner(3, 3) = 5e4 * Eigen::Matrix3d::Identity();
   EXPECT_LT((Dense(Assemble(e).stiffness) - Dense(Assemble(m).stiffness) - expected).cwiseAbs().maxCoeff(), 1e-9);
@@ -177,8 +193,9 @@ TEST(Effects, GroundSpringAddsTranslationalStiffnessAtCentre) {
 
 TEST(Effects, PendingEffectsAreAppliedInOrderBySolve) {
   Model m = OneBody();
-  m.effects = {Effect{EffectKind::kStiffnessScale, "bearings", {{"factor", 2.0}}, std::nullopt, 0},
-               Effect{EffectKind::kStiffnessScale, "bearings", {{"factor", 0.25}}, std::nullopt, 0}};
+  m.effects = {
+      Effect{EffectKind::kStiffnessScale, EffectTarget::Named("bearings"), {{"factor", 2.0}}, std::nullopt, 0},
+      Effect{EffectKind::kStiffnessScale, EffectTarget::Named("bearings"), {{"factor", 0.25}}, std::nullopt, 0}};
   Model manual = OneBody();
   manual.springs[0].stiffness_factor = 0.5;
   EXPECT_NEAR(Solve(m).modes.modes[0].frequency_hz, Solve(manual).modes.modes[0].frequency_hz, 1e-9);
@@ -188,9 +205,16 @@ TEST(Effects, PendingEffectsAreAppliedInOrderBySolve) {
 TEST(Effects, UnknownTargetOrMissingParameterIsInputError) {
   // (An unknown kind never gets this far: the model file's reader refuses it, members_test.cpp.)
   const Model m = OneBody();
-  EXPECT_THROW(ApplyEffect(m, Effect{EffectKind::kStiffnessScale, "nope", {{"factor", 2.0}}, std::nullopt, 0}), InputError);
-  EXPECT_THROW(ApplyEffect(m, Effect{EffectKind::kMassScale, "nobody", {{"factor", 2.0}}, std::nullopt, 0}), InputError);
-  EXPECT_THROW(ApplyEffect(m, Effect{EffectKind::kStiffnessScale, "bearings", {}, std::nullopt, 0}), InputError);
+  EXPECT_THROW(
+      ApplyEffect(m,
+                  Effect{EffectKind::kStiffnessScale, EffectTarget::Named("nope"), {{"factor", 2.0}}, std::nullopt, 0}),
+      InputError);
+  EXPECT_THROW(
+      ApplyEffect(m, Effect{EffectKind::kMassScale, EffectTarget::Named("nobody"), {{"factor", 2.0}}, std::nullopt, 0}),
+      InputError);
+  EXPECT_THROW(
+      ApplyEffect(m, Effect{EffectKind::kStiffnessScale, EffectTarget::Named("bearings"), {}, std::nullopt, 0}),
+      InputError);
 }
 
 TEST(Effects, CandidatesCoverEveryKindAndTargetAndStartNeutral) {

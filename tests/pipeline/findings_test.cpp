@@ -11,6 +11,8 @@
 #include "ema/model/solve.hpp"
 #include "ema/pipeline/findings.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::pipeline {
 namespace {
 
@@ -27,11 +29,11 @@ diagnose::ModeComparison Mode(int m, double frequency_sigma, double shape_sigma,
   return c;
 }
 
-diagnose::Candidate Reading(int rank, const std::string& kind, const std::string& target, double probability) {
+diagnose::Candidate Reading(int rank, const std::string& kind, const EffectTarget& target, double probability) {
   diagnose::Candidate c;
   c.rank = rank;
   c.kind = kind;
-  c.target = target;
+  c.target = model::TargetText(target);
   c.probability = probability;
   if (const model::EffectKindInfo* info = model::FindEffectKind(kind)) {  // "none": the model as given
     model::Effect e;
@@ -49,11 +51,12 @@ TEST(Findings, SpringsOfRankOnesComplianceFollowTheSeriesFormula) {
       formats::ReadModelFile(std::filesystem::path(EMA_SOURCE_DIR) / "tests/diagnose/data/benchmark-stack2.toml");
   const double k_e = 2e6;
   diagnose::Diagnosis d;
-  d.candidates = {Reading(1, "series_compliance", "mounts", 0.9), Reading(2, "none", "", 0.1)};
+  d.candidates = {Reading(1, "series_compliance", EffectTarget::Named("mounts"), 0.9),
+                  Reading(2, "none", EffectTarget(), 0.1)};
   d.candidates[0].effects[0].parameters["k"] = k_e;
   diagnose::FittedParameter p;
   p.effect_kind = model::EffectKind::kSeriesCompliance;
-  p.target = "mounts";
+  p.target = EffectTarget::Named("mounts");
   p.name = "k";
   p.value = k_e;
   p.sigma = 1e5;
@@ -61,16 +64,16 @@ TEST(Findings, SpringsOfRankOnesComplianceFollowTheSeriesFormula) {
   d.candidates[0].modes = {Mode(0, 0.5, 0.2)};
   d.baseline = d.candidates[1];
   d.baseline.modes = {Mode(0, 40.0, 1.0)};
-  d.effect_probabilities = {{model::EffectKind::kSeriesCompliance, "mounts", 0.9}};
+  d.effect_probabilities = {{model::EffectKind::kSeriesCompliance, EffectTarget::Named("mounts"), 0.9}};
   const Findings f = FindingsOf(d, nominal);
   ASSERT_EQ(f.effects.size(), 1u);
   EXPECT_DOUBLE_EQ(f.effects[0].probability, 0.9);
-  EXPECT_TRUE(f.effects[0].wildcard.empty());  // a whole group: no wildcard of its own
+  EXPECT_FALSE(f.effects[0].wildcard);  // a whole group: no wildcard of its own
   ASSERT_EQ(f.effects[0].parameters.size(), 1u);
   ASSERT_EQ(f.effects[0].springs.size(), 1u);
   const model::Solution before = model::Solve(nominal, {});
   double expected = 0.0;
-  const std::vector<int> mounts = model::TargetSprings(nominal, "mounts");
+  const std::vector<int> mounts = model::TargetSprings(nominal, EffectTarget::Named("mounts"));
   for (int i : mounts) {
     const double k = before.springs[static_cast<std::size_t>(i)].stiffness;
     expected += k * k_e / (k + k_e);
@@ -88,9 +91,12 @@ TEST(Findings, LookAlikesWithinAFactor20AndVerdictsAt2And3Sigma) {
   diagnose::Diagnosis d;
   // Rank 1 at 0.5; a group of 3 readings on points summed to 0.5 + 0.03; one reading at
   // 0.5/20 × 1.01 (in) and one at 0.5/20 × 0.99 (out).
-  d.candidates = {Reading(1, "added_mass", "points:101", 0.5), Reading(2, "added_mass", "points:102", 0.02),
-                  Reading(3, "added_mass", "points:103", 0.01), Reading(4, "stiffness_scale", "joints", 0.5 / 20 * 1.01),
-                  Reading(5, "mass_scale", "top", 0.5 / 20 * 0.99), Reading(6, "none", "", 0.0)};
+  d.candidates = {Reading(1, "added_mass", EffectTarget::Points({101}), 0.5),
+                  Reading(2, "added_mass", EffectTarget::Points({102}), 0.02),
+                  Reading(3, "added_mass", EffectTarget::Points({103}), 0.01),
+                  Reading(4, "stiffness_scale", EffectTarget::Named("joints"), 0.5 / 20 * 1.01),
+                  Reading(5, "mass_scale", EffectTarget::Named("top"), 0.5 / 20 * 0.99),
+                  Reading(6, "none", EffectTarget(), 0.0)};
   d.candidates[0].noise_consistent = false;
   d.candidates[0].reduced_chi2 = 12.0;
   d.candidates[0].modes = {Mode(0, 1.0, 0.5), Mode(1, 2.5, 0.1), Mode(2, -1.5, 3.5), Mode(3, 0.0, 0.0, false)};
@@ -101,8 +107,8 @@ TEST(Findings, LookAlikesWithinAFactor20AndVerdictsAt2And3Sigma) {
               {"stiffness_scale", "joints", {4}, 0.5 / 20 * 1.01},
               {"mass_scale", "top", {5}, 0.5 / 20 * 0.99},
               {"none", "", {6}, 0.0}};
-  d.effect_probabilities = {{model::EffectKind::kAddedMass, "points:*", 0.53},
-                            {model::EffectKind::kAddedMass, "points:101", 0.5}};
+  d.effect_probabilities = {{model::EffectKind::kAddedMass, EffectTarget::EveryPoint(), 0.53},
+                            {model::EffectKind::kAddedMass, EffectTarget::Points({101}), 0.5}};
   const Findings f = FindingsOf(d, model::Model());
   ASSERT_EQ(f.lookalikes.size(), 2u);
   EXPECT_TRUE(f.lookalikes[0].holds_rank_one);
@@ -111,7 +117,7 @@ TEST(Findings, LookAlikesWithinAFactor20AndVerdictsAt2And3Sigma) {
   EXPECT_EQ(f.lookalikes[0].span, GroupSpan::kPoints);
   EXPECT_EQ(f.lookalikes[1].kind, "stiffness_scale");
   EXPECT_FALSE(f.lookalikes[1].holds_rank_one);
-  EXPECT_EQ(f.effects[0].wildcard, "points:*");
+  EXPECT_EQ(f.effects[0].wildcard, EffectTarget::EveryPoint());
   EXPECT_DOUBLE_EQ(f.effects[0].wildcard_probability, 0.53);
   // Verdicts: 1σ within noise, 2.5σ marginal, 3.5σ in shape a misfit, unpaired.
   ASSERT_EQ(f.modes.size(), 4u);

@@ -15,7 +15,7 @@ Findings LatinOneFindings() {
   Findings f;
   EffectFinding e;
   e.effect.kind = model::EffectKind::kAddedMass;
-  e.effect.target = "point:\xB2";  // Latin-1 '²': not UTF-8
+  e.effect.target = model::EffectTarget::Named("point:\xB2");  // Latin-1 '²': not UTF-8
   e.effect.parameters["m"] = 0.015;
   diagnose::FittedParameter p;
   p.effect_kind = e.effect.kind;

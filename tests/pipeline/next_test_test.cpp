@@ -15,13 +15,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-diagnose::Candidate Mass(int rank, const std::string& point, double probability) {
+diagnose::Candidate Mass(int rank, int point, double probability) {
   diagnose::Candidate c;
   c.rank = rank;
   c.kind = "added_mass";
-  c.target = point;
+  c.target = "points:" + std::to_string(point);
   c.probability = probability;
-  c.effects = {{model::EffectKind::kAddedMass, point, {{"mass", 60.0}}, std::nullopt, 0}};
+  c.effects = {
+      {model::EffectKind::kAddedMass, model::EffectTarget::Points({point}), {{"mass", 60.0}}, std::nullopt, 0}};
   return c;
 }
 
@@ -45,7 +46,7 @@ TEST(NextTest, OneMoreSetSeparatesMirrorReadingsASymmetricTestCannot) {
   tests[0].frfs = frfs;
   // Rank 1 a mass at 1005, its mirror 1015 within a factor 20, a far reading beyond it.
   diagnose::Diagnosis d;
-  d.candidates = {Mass(1, "points:1005", 0.40), Mass(2, "points:1015", 0.38), Mass(3, "points:2010", 0.01)};
+  d.candidates = {Mass(1, 1005, 0.40), Mass(2, 1015, 0.38), Mass(3, 2010, 0.01)};
   const std::optional<NextTest> next = PlanNextTest(m, project, tests, d);
   ASSERT_TRUE(next);
   EXPECT_EQ(next->readings, (std::vector<std::string>{"added_mass on points:1005", "added_mass on points:1015"}));

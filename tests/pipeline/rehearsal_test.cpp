@@ -60,7 +60,7 @@ TEST(Rehearsal, PlannedTestsOnTheTruthNameItsHertzContactAtItsStiffness) {
   ASSERT_TRUE(run.diagnosis);
   const Findings& f = run.diagnosis->findings;
   ASSERT_EQ(f.effects.size(), 1u);
-  EXPECT_EQ(f.effects[0].effect.target, "bearings");
+  EXPECT_EQ(f.effects[0].effect.target, model::EffectTarget::Named("bearings"));
   ASSERT_TRUE(f.effects[0].effect.law);
   const auto* series = std::get_if<model::SeriesLaw>(&f.effects[0].effect.law->value);
   const model::HertzLaw* hertz = std::get_if<model::HertzLaw>(&f.effects[0].effect.law->value);

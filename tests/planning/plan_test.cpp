@@ -14,6 +14,8 @@
 #include "ema/model/solve.hpp"
 #include "model/fe_frame.hpp"
 
+using ema::model::EffectTarget;
+
 namespace ema::planning {
 namespace {
 
@@ -151,8 +153,13 @@ TEST(PlanTest, BadInputNamesTheModelAndWhatWasExpected) {
     EXPECT_NE(std::string(e.what()).find("20 test points asked, but the model has 16"), std::string::npos) << e.what();
   }
   o = GuidewayOptions();
-  Reading other{"stiffness_scale on joints/J3", {{EffectKind::kStiffnessScale, "joints/J3", {{"factor", 0.5}}, std::nullopt, 0}}, "DIAG.json, candidate rank 1"};
-  Reading second{"added_mass on points:101", {{EffectKind::kAddedMass, "points:101", {{"mass", 0.1}}, std::nullopt, 0}}, "DIAG.json, candidate rank 2"};
+  Reading other{
+      "stiffness_scale on joints/J3",
+      {{EffectKind::kStiffnessScale, EffectTarget::MemberOf("joints", "J3"), {{"factor", 0.5}}, std::nullopt, 0}},
+      "DIAG.json, candidate rank 1"};
+  Reading second{"added_mass on points:101",
+                 {{EffectKind::kAddedMass, EffectTarget::Points({101}), {{"mass", 0.1}}, std::nullopt, 0}},
+                 "DIAG.json, candidate rank 2"};
   try {
     PlanTest(m, o, {other, second});
     FAIL() << "a reading of another model was accepted";
@@ -177,8 +184,12 @@ TEST(PlanTest, CandidatesMoveTheSensorsWhereMirrorReadingsDiffer) {
   const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "plan-mirror-frame";
   const testing::FrameFiles files = testing::WriteFrame(dir, spec);
   const model::Model m = formats::ReadModelFile(files.model);
-  Reading a{"added_mass on points:1005", {{EffectKind::kAddedMass, "points:1005", {{"mass", 60.0}}, std::nullopt, 0}}, ""};
-  Reading b{"added_mass on points:1015", {{EffectKind::kAddedMass, "points:1015", {{"mass", 60.0}}, std::nullopt, 0}}, ""};
+  Reading a{"added_mass on points:1005",
+            {{EffectKind::kAddedMass, EffectTarget::Points({1005}), {{"mass", 60.0}}, std::nullopt, 0}},
+            ""};
+  Reading b{"added_mass on points:1015",
+            {{EffectKind::kAddedMass, EffectTarget::Points({1015}), {{"mass", 60.0}}, std::nullopt, 0}},
+            ""};
   PlanOptions o;
   o.sensors_per_set = 6, o.sets = 1, o.references = 1, o.default_modes = 5;
   const TestPlan plan = PlanTest(m, o, {a, b});

@@ -140,10 +140,11 @@ struct FitResult {
   std::string selection_rule;
 };
 
-/// `source` names the input in messages. Throws InputError for bad input (see PrepareFitData and
-/// EstimatePoles). `progress`: the PolyMAX orders done ("poles", from the per-order threads), then
-/// the refinement's iterations and the shapes, 1 when done; what it throws from any of those
-/// threads (`ema::Cancelled`) stops the fit and reaches the caller.
+/// `source` names the input in messages: every InputError it throws for bad input (see
+/// PrepareFitData and EstimatePoles) is placed there ("FRF.unv: polymax: ..."). `progress`: the
+/// PolyMAX orders done ("poles", from the per-order threads), then the refinement's iterations and
+/// the shapes, 1 when done; what it throws from any of those threads (`ema::Cancelled`) stops the
+/// fit and reaches the caller.
 FitResult Fit(const FrfSet& frfs, const FitOptions& options, const std::string& source = "FRF set",
               const ProgressCallback& progress = {});
 

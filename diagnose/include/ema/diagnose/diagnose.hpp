@@ -8,6 +8,7 @@
 // to 1 with "none") → explanation (in words, with the error falling as each effect is added).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -150,7 +151,7 @@ struct DiagnoseOptions {
 /// One fitted parameter with its posterior 1σ.
 struct FittedParameter {
   model::EffectKind effect_kind = model::EffectKind::kSeriesCompliance;
-  std::string target;
+  model::EffectTarget target;  ///< its effect's target
   std::string name;      ///< "k" (series_compliance: the law's k), "factor", "value", "mass", "modulus"
   double value = kNaN;
   double sigma = kNaN;   ///< NaN when the posterior is singular
@@ -199,7 +200,9 @@ struct Candidate {
   /// A label of the combination, for people and JSON: "none", an effect kind's name, or
   /// "kind1+kind2". Decisions go by `effects` (IsNone), never by this text.
   std::string kind;
-  std::string target;                       ///< "" for none, "t1+t2" for several
+  /// A label of the targets, as `kind` is of the kinds: "" for none, "t1+t2" (model::TargetText)
+  /// for several. Decisions go by `effects`, never by this text.
+  std::string target;
   double cost = kNaN;                       ///< robust sum of squared residuals in σ
   double log_prior = 0.0;                   ///< log prior density at the fitted parameters
   double log_evidence = kNaN;               ///< Laplace approximation
@@ -243,18 +246,18 @@ struct Step {
 
 /// How sure the diagnosis is of one effect, whichever candidate holds it: the summed probability
 /// of the candidates that contain it. `target` is exact ("bearings", "joints/J3", "points:101")
-/// or, summed over the members of a group or over single points, "joints/*" or "points:*".
-/// Where the data cannot tell which member or point (several near-equal candidates), the
-/// wildcard's probability is the one to read.
+/// or, summed over the members of a group or over single points, "joints/*" or "points:*"
+/// (EffectTarget::Form::kEveryMember, kEveryPoint). Where the data cannot tell which member or
+/// point (several near-equal candidates), the wildcard's probability is the one to read.
 struct EffectProbability {
   model::EffectKind kind = model::EffectKind::kSeriesCompliance;
-  std::string target;
+  model::EffectTarget target;
   double probability = 0.0;
 };
 
-/// The wildcard an effect target is summed under: "GROUP/*" for a member, "points:*" for a single
-/// point, the target itself otherwise.
-std::string EffectWildcard(const std::string& target);
+/// The wildcard an effect target is summed under: every member of the group ("GROUP/*") for a
+/// member, every point ("points:*") for a single point, nullopt for any other target.
+std::optional<model::EffectTarget> EffectWildcard(const model::EffectTarget& target);
 
 /// The effect probabilities of ranked candidates, most probable first (≥ 1 % only).
 std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>& ranked);
@@ -262,7 +265,7 @@ std::vector<EffectProbability> EffectProbabilities(const std::vector<Candidate>&
 /// Candidates that are one reading on different members or points (the same kinds on the same
 /// groups): the data tell them apart only by which member or point, so reports show them as one
 /// row. `kind` is the candidates' label ("none", "kind1+kind2"; decide by their effects), `target`
-/// joins the wildcard targets ("joints/*", "points:*") with '+'.
+/// a label too: the texts of the wildcard targets ("joints/*", "points:*") joined with '+'.
 struct CandidateGroup {
   std::string kind;
   std::string target;

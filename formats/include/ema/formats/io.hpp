@@ -49,6 +49,10 @@ FrfSet StoredFrfSet(const FrfSet& frfs, const WriteOptions& options = {});
 /// number), `frequency_std_hz` the measured 1σ of the frequency; no geometry.
 ModeSet ReadModeSet(const std::filesystem::path& path);
 
+/// The same from MODES.json's text itself (what a Python dict in that layout holds): `origin`
+/// names it in messages, as a file's name does, and is the set's source.
+ModeSet ReadModeSetJsonText(const std::string& text, const std::string& origin);
+
 /// Writes 151 header, 15 geometry (when known) and one 55 complex-mode dataset per mode.
 void WriteModeSet(const std::filesystem::path& path, const ModeSet& modes, const WriteOptions& options = {});
 

@@ -17,6 +17,7 @@
 //    centre to ground, group "ground_spring".
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,11 +25,11 @@
 
 namespace ema::model {
 
-/// What an effect's target names.
-enum class EffectTarget {
-  kSprings,  ///< a spring group ("joints") or one member of it ("joints/J3")
+/// What a kind of effect acts on (the category of its targets; EffectTarget is one target).
+enum class ActsOn {
+  kSprings,  ///< a spring group ("joints") or one member of it ("joints/J3"); stiffness_scale also FE parts
   kPoints,   ///< "all_points" or "points:101,102"
-  kBody,     ///< a body name
+  kBody,     ///< a body name; mass_scale also FE parts
 };
 
 /// The shape of a parameter's prior (model-format.md "Prior knowledge", docs/diagnose.md).
@@ -42,7 +43,7 @@ struct EffectKindInfo {
   EffectKind kind;
   const char* name;       ///< "series_compliance" (model files, JSON)
   const char* parameter;  ///< the free parameter diagnosis fits: "k", "factor", "value", "mass"
-  EffectTarget target;
+  ActsOn acts_on;
   bool members;           ///< also applies to one member of a group ("GROUP/MEMBER")
   /// Range searched by diagnosis, as multiples of the parameter's reference value (log scale).
   double range_low, range_high;
@@ -88,12 +89,20 @@ const std::vector<std::string>& EffectKinds();
 /// "kind target k=v ..." for messages and reports.
 std::string Describe(const Effect& effect);
 
+/// The one reader of a target's text (model-format.md "Effects"): for a kind that acts on points,
+/// "all_points" or "points:101,102" (ids separated by commas); for the others a name ("joints") or
+/// "GROUP/MEMBER" (split at the first '/'). The model is not consulted: whether the name is a
+/// spring group, a part or a body is ApplyEffect's question. nullopt with *error saying what was
+/// expected for anything else (an empty text, a bad id, "GROUP/" or "GROUP/*", which names no one
+/// member); the caller says where (file and line).
+std::optional<EffectTarget> ParseEffectTarget(EffectKind kind, const std::string& text, std::string* error);
+
 /// One member of a spring group (model-format.md "Members"): a joint, bolt, pad or mount.
 struct Member {
   std::string group;
   std::string name;
   std::vector<int> springs;  ///< indices into Model::springs
-  std::string Target() const { return group + "/" + name; }
+  EffectTarget Target() const { return EffectTarget::MemberOf(group, name); }
 };
 
 /// The members of every group, groups in order of first appearance. A spring's member is its
@@ -102,19 +111,22 @@ struct Member {
 /// share none (or when that prefix is already another member's name in the group).
 std::vector<Member> Members(const Model& model);
 
-/// The test points (indices into Model::points) a points target of `effect` names: "all_points" or
-/// "points:101,102" — the one reader of that target. InputError naming the effect for another
-/// target, a bad or unknown point id, or "all_points" on a model without points.
+/// The test points (indices into Model::points) a points target of `effect` names: all_points or
+/// the listed ids. InputError naming the effect for another target, an unknown point id, or
+/// all_points on a model without points.
 std::vector<int> TargetPoints(const Model& model, const Effect& effect);
 
-/// The spring indices a spring-group target names: "GROUP" (every spring of the group) or
-/// "GROUP/MEMBER". Empty when nothing matches.
-std::vector<int> TargetSprings(const Model& model, const std::string& target);
+/// The spring indices a spring target names: a group's name (every spring of the group) or one
+/// member of it. Empty when nothing matches.
+std::vector<int> TargetSprings(const Model& model, const EffectTarget& target);
 
 /// The FE part indices (Model::fe.parts) a part target names (model-format.md "FE models built
-/// from parts"): "GROUP" (every part of the group), "GROUP/NAME" (one member) or the name of a part
-/// in no group. Empty when nothing matches.
-std::vector<int> TargetParts(const Model& model, const std::string& target);
+/// from parts"): a part group's name (every part of the group), one member of it, or the name of a
+/// part in no group. Empty when nothing matches.
+std::vector<int> TargetParts(const Model& model, const EffectTarget& target);
+
+/// The body a target names (a name that is a body's); nullptr otherwise.
+const Body* TargetBody(const Model& model, const EffectTarget& target);
 
 /// The operating value of a spring's non-linear law (setting, gap, deflection or force); NaN for
 /// a linear law.

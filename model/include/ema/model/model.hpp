@@ -7,6 +7,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <compare>
+#include <iosfwd>
 #include <limits>
 #include <map>
 #include <memory>
@@ -182,10 +184,53 @@ enum class EffectKind { kSeriesCompliance, kStiffnessScale, kOperatingPoint, kAd
 template <typename Json>
 void to_json(Json& json, EffectKind kind) = delete;
 
+/// What an effect acts on (model-format.md "Effects"), typed. Its text is read once, where text
+/// enters (model::ParseEffectTarget, effects.hpp: the model file's [[effect]] reader, which
+/// DIAG.json's effects go through too), and written once (TargetText: model files, JSON, reports,
+/// Describe); everything in between compares these values. The text gives the form; the model
+/// says what a name is — spring groups, FE part groups, parts in no group and bodies share one
+/// namespace (model-format.md) — through TargetSprings, TargetParts, TargetBody and TargetPoints.
+struct EffectTarget {
+  enum class Form {
+    kName,         ///< "joints", "top", "clamp": a spring group, an FE part group, a part in no group or a body
+    kMember,       ///< "joints/J3": one member of a spring group, or one part of an FE part group
+    kEveryMember,  ///< "joints/*": any one member of a group; a sum over members, no effect's
+    kAllPoints,    ///< "all_points": every test point
+    kPoints,       ///< "points:101,102": the test points of these ids
+    kEveryPoint,   ///< "points:*": any single test point; a sum over points, no effect's
+  };
+  Form form = Form::kName;
+  std::string name;         ///< kName: the name; kMember, kEveryMember: the group's name
+  std::string member;       ///< kMember: the member's name (may hold '/': an implicit member named after its springs)
+  std::vector<int> points;  ///< kPoints: the test point ids, in the order given
+
+  static EffectTarget Named(std::string name);
+  static EffectTarget MemberOf(std::string group, std::string member);
+  static EffectTarget EveryMemberOf(std::string group);
+  static EffectTarget AllPoints();
+  static EffectTarget Points(std::vector<int> ids);
+  static EffectTarget EveryPoint();
+
+  bool IsPoints() const { return form == Form::kAllPoints || form == Form::kPoints; }
+  friend bool operator==(const EffectTarget&, const EffectTarget&) = default;
+  /// An order for maps and sets (by form, then names, then ids); not the order of the texts.
+  friend auto operator<=>(const EffectTarget&, const EffectTarget&) = default;
+};
+
+/// The text of a target, as model files, JSON and reports write it and ParseEffectTarget reads it:
+/// "joints", "joints/J3", "joints/*", "all_points", "points:101,102", "points:*" (the one printer).
+std::string TargetText(const EffectTarget& target);
+/// Its text on a stream (TargetText), for messages and test output.
+std::ostream& operator<<(std::ostream& out, const EffectTarget& target);
+/// A target goes into JSON as its text, written by TargetText where it is put there; this deleted
+/// overload (found by argument-dependent lookup) keeps nlohmann::json from guessing another way.
+template <typename Json>
+void to_json(Json& json, const EffectTarget& target) = delete;
+
 /// An effect of the vocabulary (model-format.md): kind, target, parameters and optional law.
 struct Effect {
   EffectKind kind = EffectKind::kSeriesCompliance;  ///< always set by whoever makes the effect
-  std::string target;
+  EffectTarget target;
   std::map<std::string, double> parameters;  ///< factor, value, mass, k (per kind)
   /// series_compliance: the law in series. Without a law, parameters["k"] means a linear law
   /// (handy for fitting); WriteModelWithEffects then writes it as law = { linear = { k } }.
@@ -213,7 +258,9 @@ struct FePart {
   bool HasMass() const { return mass != nullptr; }
   bool HasStiffness() const { return stiffness != nullptr; }
   /// How an effect names it: "GROUP/NAME" for a member of a group, "NAME" for a part in no group.
-  std::string Target() const { return group.empty() ? name : group + "/" + name; }
+  EffectTarget Target() const {
+    return group.empty() ? EffectTarget::Named(name) : EffectTarget::MemberOf(group, name);
+  }
 };
 
 /// Imported finite-element matrices (symmetric; lower or full storage accepted). `mass` and

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,9 +28,9 @@ struct EffectFinding {
   model::Effect effect;                             ///< kind, target, fitted values, law
   std::vector<diagnose::FittedParameter> parameters;  ///< its fitted parameters with their 1σ
   double probability = 0.0;                         ///< summed over every candidate that holds it
-  /// The same kind on any member or point of its group ("joints/*", "points:*"; "" when the target
-  /// has no such wildcard), with that summed probability.
-  std::string wildcard;
+  /// The same kind on any member or point of its group ("joints/*", "points:*"; none when the
+  /// target has no such wildcard or no candidate held it), with that summed probability.
+  std::optional<model::EffectTarget> wildcard;
   double wildcard_probability = 0.0;
   std::vector<SpringStiffness> springs;             ///< spring targets: per setup of the tests
 };
