@@ -24,19 +24,26 @@ double PhaseCollinearity(const Eigen::VectorXcd& shape) {
   return ((sxx - syy) * (sxx - syy) + 4.0 * sxy * sxy) / (total * total);
 }
 
-double BlendMac(const Eigen::VectorXcd& test_shape, const Eigen::MatrixXcd& model_shapes, const Eigen::VectorXd& model_hz,
-                int j, double plain_mac, double half_power_hz) {
-  if (!(half_power_hz > 0.0)) return plain_mac;
-  // Neighbours of j whose weight matters (within 3 half-power widths).
+// Model mode j and its neighbours within 3 half-power widths (j first), and in *weight the blend
+// weight exp(−z²) of the closest, z its distance in half-power widths (0 without neighbours).
+static std::vector<Eigen::Index> CloseModes(const Eigen::VectorXd& model_hz, int j, double half_power_hz, double* weight) {
   std::vector<Eigen::Index> cols{j};
-  double weight = 0.0;
+  *weight = 0.0;
   for (Eigen::Index k = 0; k < model_hz.size(); ++k) {
     if (k == j) continue;
     const double z = (model_hz(k) - model_hz(j)) / half_power_hz;
     if (std::abs(z) > 3.0) continue;
     cols.push_back(k);
-    weight = std::max(weight, std::exp(-z * z));
+    *weight = std::max(*weight, std::exp(-z * z));
   }
+  return cols;
+}
+
+double BlendMac(const Eigen::VectorXcd& test_shape, const Eigen::MatrixXcd& model_shapes, const Eigen::VectorXd& model_hz,
+                int j, double plain_mac, double half_power_hz) {
+  if (!(half_power_hz > 0.0)) return plain_mac;
+  double weight = 0.0;
+  const std::vector<Eigen::Index> cols = CloseModes(model_hz, j, half_power_hz, &weight);
   if (cols.size() == 1) return plain_mac;
   Eigen::MatrixXcd basis(model_shapes.rows(), static_cast<Eigen::Index>(cols.size()));
   for (size_t c = 0; c < cols.size(); ++c) basis.col(static_cast<Eigen::Index>(c)) = model_shapes.col(cols[c]);
@@ -69,16 +76,8 @@ Eigen::VectorXd ShapeDifference(const Eigen::VectorXd& test_real, const Eigen::M
   const Eigen::MatrixXd own = RealShape(model_shapes.col(j));
   const Eigen::VectorXd plain = test_real - fitted_by(own);
   if (!(half_power_hz > 0.0)) return plain;
-  // The close neighbours and the weight of the closest, as BlendMac.
-  std::vector<Eigen::Index> cols{j};
   double weight = 0.0;
-  for (Eigen::Index k = 0; k < model_hz.size(); ++k) {
-    if (k == j) continue;
-    const double z = (model_hz(k) - model_hz(j)) / half_power_hz;
-    if (std::abs(z) > 3.0) continue;
-    cols.push_back(k);
-    weight = std::max(weight, std::exp(-z * z));
-  }
+  const std::vector<Eigen::Index> cols = CloseModes(model_hz, j, half_power_hz, &weight);  // as BlendMac
   if (cols.size() == 1) return plain;
   Eigen::MatrixXd basis(model_shapes.rows(), static_cast<Eigen::Index>(cols.size()));
   for (size_t c = 0; c < cols.size(); ++c) basis.col(static_cast<Eigen::Index>(c)) = RealShape(model_shapes.col(cols[c]));
@@ -117,13 +116,11 @@ Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, co
       block_start_.push_back(block_start_.back() + 1 + (per_dof ? static_cast<int>(s.real_shapes.rows()) : 1));
   residual_count_ = block_start_.back();
   model_error_gain_.resize(residual_count_);
-  frequency_row_.assign(static_cast<size_t>(residual_count_), false);
   Eigen::VectorXd log_hz(TestModeCount());
   int mode = 0;
   for (const auto& s : setups_)
     for (Eigen::Index i = 0; i < s.test_hz.size(); ++i, ++mode) {
       const int row = block_start_[static_cast<size_t>(mode)];
-      frequency_row_[static_cast<size_t>(row)] = true;
       model_error_gain_(row) = s.test_hz(i) / s.sigma_hz(i);
       if (per_dof) {
         // ε_s is the rms error of a unit-norm shape, spread over its d DOFs: ε_s / √d at each.

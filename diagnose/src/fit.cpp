@@ -243,12 +243,12 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
     double log_norm = 0.0;       // Σ ln scale over the frequency rows
     Eigen::Vector2d ur = Eigen::Vector2d::Zero();  // Uᵀ W r̃ (W the Huber weights)
     Eigen::Matrix2d uu = Eigen::Matrix2d::Zero();  // Uᵀ W U
-    Eigen::MatrixXd jwj;         // Σ w J̃ᵀJ̃ of the frequency rows
+    Eigen::MatrixXd jwj;         // Σ w J̃ᵀJ̃ of the frequency rows + prior curvature
     Eigen::MatrixXd jwu;         // J̃ᵀ W U (k × 2)
   };
   auto scaled_at = [&](double frequency_rel) {
     Scaled out;
-    out.jwj = Eigen::MatrixXd::Zero(k, k);
+    out.jwj = prior_curvature.asDiagonal();
     out.jwu = Eigen::MatrixXd::Zero(k, 2);
     for (int m = 0; m < modes; ++m) {
       const int b = blocks[m];  // the mode's frequency row
@@ -334,8 +334,7 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
     const double log_likelihood =
         -0.5 * (sc.cost_w - explained) + sc.log_norm - 0.5 * log_det_shared + sh.log_likelihood;
     if (k == 0) return log_likelihood;
-    const Eigen::MatrixXd h =
-        Eigen::MatrixXd(prior_curvature.asDiagonal()) + sc.jwj + sh.jwj - sc.jwu * m_inv * sc.jwu.transpose();
+    const Eigen::MatrixXd h = sc.jwj + sh.jwj - sc.jwu * m_inv * sc.jwu.transpose();
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(h);
     double log_det = 0.0;
     bool pd = ldlt.info() == Eigen::Success && ldlt.isPositive();

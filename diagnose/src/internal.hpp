@@ -139,8 +139,6 @@ class Evaluator {
   /// frequency, 1 / σ_shape for a (1 − MAC) row, 1 / (√d · σ_dof) for a shape DOF of d. A model
   /// error ε adds (ε · gain)² to its variance in σ².
   const Eigen::VectorXd& ModelErrorGain() const { return model_error_gain_; }
-  /// Per residual: true on frequency rows (ε_f), false on shape rows (ε_s).
-  const std::vector<bool>& FrequencyRow() const { return frequency_row_; }
   /// Per residual row: ln f of its test mode standardised over every test mode (0 on shape rows
   /// and when all modes share one frequency) — the pattern of a model error that grows or shrinks
   /// with frequency (shear and rotary inertia a beam model lacks, a mesh too coarse).
@@ -171,7 +169,6 @@ class Evaluator {
   int max_modes_ = 0;
   int residual_count_ = 0;
   std::vector<int> block_start_;
-  std::vector<bool> frequency_row_;
   Eigen::VectorXd model_error_gain_;
   Eigen::VectorXd model_error_trend_;
   int solves_ = 0;
