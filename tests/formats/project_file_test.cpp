@@ -111,9 +111,11 @@ TEST(ProjectFile, PerTestSelectAndPick) {
 // ---- The typed options of [frf], [fit] and [diagnose] (issue 38) ------------------------------
 
 // A project with one test (FRFs given) and `tables` after it: [[test]] ends on line 4, so the
-// first line of `tables` is line 5.
+// first line of `tables` is line 5. Each test has its own folder: ctest runs the tests of this
+// file in parallel processes, and two writing the same bad.toml read each other's file.
 fs::path OptionsProject(const std::string& name, const std::string& tables) {
-  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "project-options";
+  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "project-options" /
+                       ::testing::UnitTest::GetInstance()->current_test_info()->name();
   fs::create_directories(dir);
   std::ofstream(dir / "model.toml") << "[model]\nname = \"x\"\n";
   std::ofstream(dir / "frf.unv") << "";
