@@ -1,19 +1,21 @@
 // The candidate readings of DIAG.json (`ema diagnose --json`): the JSON layout of json_codecs.cpp
-// (CandidateJson, EffectJson) read back; each effect goes through the model file's own [[effect]]
-// reader (effect_toml.hpp), so its keys and laws are taken exactly as a model file takes them.
+// (CandidateJson, EffectJson) read back; each effect's values go through the model file's own
+// rules for an [[effect]] (effect_fields.hpp), so its parameters, kind, target and law are taken
+// exactly as a model file takes them.
 #include "ema/formats/diagnosis_readings.hpp"
 
 #include <algorithm>
 #include <cstdint>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <toml++/toml.h>
 
 #include "ema/core/error.hpp"
-#include "toml_text.hpp"
-#include "effect_toml.hpp"
+#include "effect_fields.hpp"
 
 namespace ema::formats {
 namespace {
@@ -100,46 +102,43 @@ class DiagnosisJsonReader {
     return it->get<std::string>();
   }
 
-  // {"kind", "target", "parameters": {name: value}, "law": "<inline TOML>"} as the TOML of one
-  // [[effect]] block, read by the model file's reader.
+  // {"kind", "target", "parameters": {name: number}, "law": "<inline TOML>"}: the values handed to
+  // the model file's rules for an [[effect]] (effect_fields.hpp) as they are, the law parsed once
+  // from its documented field format into the table the law parser takes.
   model::Effect Effect(const nlohmann::json& e, const std::string& where) const {
     if (!e.is_object()) throw InputError(file_, where + ": expected an object, found " + std::string(e.type_name()));
-    std::string text = "[[effect]]\nkind = " + TomlString(String(e, "kind", where)) +
-                       "\ntarget = " + TomlString(String(e, "target", where)) + "\n";
+    const std::string kind = String(e, "kind", where);
+    const std::string target = String(e, "target", where);
+    std::map<std::string, double> parameters;
     if (const auto p = e.find("parameters"); p != e.end()) {
       if (!p->is_object()) throw InputError(file_, where + ": key 'parameters': expected an object {name: number}");
       for (const auto& [name, value] : p->items()) {
         if (!value.is_number())
           throw InputError(file_, where + ": parameter '" + name + "': expected a number, found " + value.dump());
-        text += TomlString(name) + " = " + TomlFloat(value.get<double>()) + "\n";
+        parameters[name] = value.get<double>();
       }
     }
+    std::optional<toml::table> law;
     if (const auto l = e.find("law"); l != e.end() && !l->is_null()) {
       if (!l->is_string()) throw InputError(file_, where + ": key 'law': expected the inline TOML of a law as a string");
-      const std::string law = l->get<std::string>();
-      if (law.find_first_of("\r\n") != std::string::npos)
-        throw InputError(file_, where + ": key 'law': expected the inline TOML of one law on one line, such as "
-                                        "\"{ linear = { k = 6.5e6 } }\"");
-      try {
-        (void)toml::parse("law = " + law + "\n");  // said here, not as an error of the TOML built below
-      } catch (const toml::parse_error& x) {
-        throw InputError(file_, where + ": key 'law': '" + law + "' is not the inline TOML of a law such as "
-                                "\"{ linear = { k = 6.5e6 } }\" (" + std::string(x.description()) + ")");
-      }
-      text += "law = " + law + "\n";
+      law = LawField(l->get<std::string>(), where);
     }
-    const std::string origin = file_ + ": " + where;
-    model::Effect effect;
+    return EffectFromFields(kind, target, parameters, law ? law->get("law") : nullptr, file_ + ": " + where, base_dir_);
+  }
+
+  // The "law" field: one inline TOML value, "{ linear = { k = 6.5e6 } }", read by toml++ as the
+  // value of a key (toml++ parses documents, not lone values); on one line nothing else can follow
+  // the value but a comment, so the table holds that one key.
+  toml::table LawField(const std::string& law, const std::string& where) const {
+    if (law.find_first_of("\r\n") != std::string::npos)
+      throw InputError(file_, where + ": key 'law': expected the inline TOML of one law on one line, such as "
+                                      "\"{ linear = { k = 6.5e6 } }\"");
     try {
-      effect = ParseEffectToml(text, origin, base_dir_);
-    } catch (const InputError& x) {
-      // Said at the candidate: the line counts in the TOML text built here, which the user never
-      // sees (an error in a curve file the law names keeps that file's place).
-      const bool here = x.Where().compare(0, origin.size(), origin) == 0;
-      throw InputError(origin, here ? x.Detail() : x.what());
+      return toml::parse("law = " + law);
+    } catch (const toml::parse_error& x) {
+      throw InputError(file_, where + ": key 'law': '" + law + "' is not the inline TOML of a law such as "
+                              "\"{ linear = { k = 6.5e6 } }\" (" + std::string(x.description()) + ")");
     }
-    effect.line = 0;  // no line of a file
-    return effect;
   }
 
   std::filesystem::path base_dir_;

@@ -17,7 +17,7 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/matrix_market.hpp"
 #include "ema/formats/toml_fields.hpp"
-#include "effect_toml.hpp"
+#include "effect_fields.hpp"
 #include "toml_text.hpp"
 #include "text_lines.hpp"
 #include "ema/formats/uff.hpp"
@@ -47,11 +47,19 @@ void ForEachCsvRow(std::istream& in, const fs::path& file,
   }
 }
 
+// The parameters an effect takes by name (model-format.md "Effects"); which of them a kind needs
+// is ApplyEffect's question.
+const std::set<std::string>& EffectParameterNames() {
+  static const std::set<std::string> names = {"factor", "value", "mass", "k"};
+  return names;
+}
+
 class Reader : public TomlFields {
  public:
   explicit Reader(const fs::path& path) : TomlFields(path.string()), path_(path), dir_(path.parent_path()) {}
-  /// For TOML text that is not a file: `origin` names it in messages, `dir` resolves relative paths.
-  Reader(const std::string& origin, const fs::path& dir) : TomlFields(origin), dir_(dir) {}
+  /// For TOML values inside another format: `place` names them in messages (their lines are in no
+  /// file), `dir` resolves relative paths.
+  Reader(const std::string& place, const fs::path& dir) : TomlFields(place, TomlLines::kInNoFile), dir_(dir) {}
 
   int Line(const toml::node& n) const { return static_cast<int>(n.source().begin.line); }
 
@@ -112,15 +120,22 @@ class Reader : public TomlFields {
     const fs::path f = Resolve(String(n, "file"));
     std::ifstream in(f);
     if (!in) throw InputError(At(n), "cannot open curve file '" + f.string() + "'");
-    ForEachCsvRow(in, f, [&](int no, std::istringstream& s) {
-      double a = 0, b = 0;
-      if (!(s >> a >> b)) {
-        if (x->empty()) return;  // header line(s) before the data
-        throw InputError(f.string() + ":" + std::to_string(no), "expected two numbers 'x,y'");
-      }
-      x->push_back(a);
-      y->push_back(b);
-    });
+    try {
+      ForEachCsvRow(in, f, [&](int no, std::istringstream& s) {
+        double a = 0, b = 0;
+        if (!(s >> a >> b)) {
+          if (x->empty()) return;  // header line(s) before the data
+          throw InputError(f.string() + ":" + std::to_string(no), "expected two numbers 'x,y'");
+        }
+        x->push_back(a);
+        y->push_back(b);
+      });
+    } catch (const InputError& e) {
+      if (lines_ == TomlLines::kOfTheFile) throw;
+      // A law with no file line of its own (DIAG.json's): the curve file's place follows the
+      // place of the value that names it ("DIAG.json: candidate rank 3: effect 1: curve.csv:4: ...").
+      throw InputError(file_, e.what());
+    }
   }
 
   Law ParseLaw(const toml::node& node, const std::string& context) const {
@@ -596,43 +611,51 @@ class Reader : public TomlFields {
 
   /// One [[effect]] table: kind, target, the parameters factor/value/mass/k and the law.
   model::Effect ReadEffect(const toml::table& t) const {
-    CheckKeys(t, {"kind", "target", "law", "factor", "value", "mass", "k"}, "[[effect]]");
-    model::Effect e;
-    e.line = Line(t);
+    std::set<std::string> keys = EffectParameterNames();
+    keys.insert({"kind", "target", "law"});
+    CheckKeys(t, keys, "[[effect]]");
     const std::string kind = String(Require(t, "kind", "[[effect]]"), "kind");
     const toml::node& target_node = Require(t, "target", "[[effect]]");
     const std::string target = String(target_node, "target");
-    for (const char* key : {"factor", "value", "mass", "k"})
-      if (auto v = OptNumber(t, key)) e.parameters[key] = *v;
-    if (const toml::node* l = t.get("law")) e.law = ParseLaw(*l, "effect " + kind);
+    std::map<std::string, double> parameters;
+    for (const std::string& name : EffectParameterNames())
+      if (auto v = OptNumber(t, name)) parameters[name] = *v;
+    model::Effect e = EffectOf(kind, target, parameters, t.get("law"), At(t), At(target_node));
+    e.line = Line(t);
+    return e;
+  }
+
+  /// An effect from its fields read as values (an [[effect]] table's, or DIAG.json's: effect_fields.hpp):
+  /// its rules past the types of the values. The kind and the target are said at `kind_at` and
+  /// `target_at`, the law's nodes at their own places (At).
+  model::Effect EffectOf(const std::string& kind, const std::string& target,
+                         const std::map<std::string, double>& parameters, const toml::node* law,
+                         const std::string& kind_at, const std::string& target_at) const {
+    model::Effect e;
+    for (const auto& [name, value] : parameters) {
+      if (!EffectParameterNames().count(name)) {
+        std::string allowed;
+        for (const std::string& p : EffectParameterNames()) allowed += (allowed.empty() ? "" : ", ") + p;
+        throw InputError(kind_at, "effect " + kind + " '" + target + "': unknown parameter '" + name +
+                                      "' (allowed: " + allowed + ")");
+      }
+      e.parameters[name] = value;
+    }
+    if (law) e.law = ParseLaw(*law, "effect " + kind);
     // The one place an effect's kind and target are read from text (DIAG.json's effects come
     // through here too).
     const model::EffectKindInfo* info = model::FindEffectKind(kind);
     if (!info) {
       std::string kinds;
       for (const std::string& k : model::EffectKinds()) kinds += (kinds.empty() ? "" : ", ") + k;
-      throw InputError(At(t), "effect " + kind + " '" + target + "': unknown effect kind (allowed: " + kinds + ")");
+      throw InputError(kind_at, "effect " + kind + " '" + target + "': unknown effect kind (allowed: " + kinds + ")");
     }
     e.kind = info->kind;
     std::string why;
     std::optional<model::EffectTarget> parsed = model::ParseEffectTarget(e.kind, target, &why);
-    if (!parsed) throw InputError(At(target_node), "effect " + kind + " '" + target + "': " + why);
+    if (!parsed) throw InputError(target_at, "effect " + kind + " '" + target + "': " + why);
     e.target = std::move(*parsed);
     return e;
-  }
-
-  /// The one [[effect]] block of `text` (effect_toml.hpp).
-  model::Effect ReadEffectText(const std::string& text) const {
-    toml::table root;
-    try {
-      root = toml::parse(text, file_);
-    } catch (const toml::parse_error& e) {
-      throw InputError(file_ + ":" + std::to_string(e.source().begin.line), std::string(e.description()));
-    }
-    CheckKeys(root, {"effect"}, "the effect text");
-    const toml::array* a = root["effect"].as_array();
-    if (!a || a->size() != 1) throw InputError(file_, "expected exactly one [[effect]] block");
-    return ReadEffect(Table((*a)[0], "effect"));
   }
 
  private:
@@ -656,8 +679,10 @@ std::string Array(const std::vector<double>& v) {
 
 }  // namespace
 
-model::Effect ParseEffectToml(const std::string& text, const std::string& origin, const std::filesystem::path& base_dir) {
-  return Reader(origin, base_dir).ReadEffectText(text);
+model::Effect EffectFromFields(const std::string& kind, const std::string& target,
+                               const std::map<std::string, double>& parameters, const toml::node* law,
+                               const std::string& place, const std::filesystem::path& base_dir) {
+  return Reader(place, base_dir).EffectOf(kind, target, parameters, law, place, place);
 }
 
 model::Model ReadModelFile(const std::filesystem::path& path) {

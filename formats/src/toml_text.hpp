@@ -1,5 +1,5 @@
-// TOML text the formats write by hand (the plan file, the [[effect]] blocks of a model and of the
-// readings of a diagnosis): one rule for a float and one for a basic string.
+// TOML text the formats write by hand (the plan file, the [[effect]] blocks of a model): one rule
+// for a float and one for a basic string.
 #pragma once
 
 #include <charconv>

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -246,6 +247,119 @@ TEST(DiagnosisReadings, BadFilesNameTheFileAndTheRank) {
   ASSERT_NE(at, std::string::npos) << law_message;
   EXPECT_EQ(law_message.substr(at + 27, 2), " u") << law_message;  // ": unknown key ...", no ":LINE:"
   EXPECT_THROW(ReadDiagnosisReadings(test::TmpFile("readings-missing.json")), InputError);
+}
+
+// One candidate (rank 1, kind and target as its one effect's) around `effect`, the JSON of one effect.
+nlohmann::json OneEffectDiagnosis(const nlohmann::json& effect) {
+  return {{"candidates",
+           {{{"rank", 1}, {"kind", effect.value("kind", "")}, {"target", effect.value("target", "")},
+             {"effects", nlohmann::json::array({effect})}}}}};
+}
+
+// The message of the InputError reading the JSON `diagnosis` throws ("" when none).
+std::string ReadingsErrorOf(const nlohmann::json& diagnosis) {
+  try {
+    ReadDiagnosisReadings(diagnosis, "DIAG.json", EMA_TEST_TMP_DIR);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// The values of an effect are values: names and texts holding TOML syntax are taken verbatim
+// (nothing is written out as TOML and read again), so they name what they are, never act as TOML.
+TEST(DiagnosisReadings, ParameterNamesAndTargetsAreValuesNotToml) {
+  const std::string allowed = "(allowed: factor, k, mass, value)";
+  EXPECT_EQ(ReadingsErrorOf(OneEffectDiagnosis(
+                {{"kind", "stiffness_scale"}, {"target", "mounts"}, {"parameters", {{"factor\" = 3 #", 2.0}}}})),
+            "DIAG.json: candidate rank 1: effect 1: effect stiffness_scale 'mounts': unknown parameter "
+            "'factor\" = 3 #' " + allowed);
+  EXPECT_EQ(ReadingsErrorOf(OneEffectDiagnosis(
+                {{"kind", "stiffness_scale"}, {"target", "mounts"}, {"parameters", {{"x\nfactor", 2.0}}}})),
+            "DIAG.json: candidate rank 1: effect 1: effect stiffness_scale 'mounts': unknown parameter "
+            "'x\nfactor' " + allowed);
+  // A key a model file takes, but no parameter of an effect.
+  EXPECT_EQ(ReadingsErrorOf(OneEffectDiagnosis(
+                {{"kind", "stiffness_scale"}, {"target", "mounts"}, {"parameters", {{"target", 2.0}}}})),
+            "DIAG.json: candidate rank 1: effect 1: effect stiffness_scale 'mounts': unknown parameter "
+            "'target' " + allowed);
+  // A points target with TOML in it is a bad point id, said at its candidate.
+  const std::string points = "points:101\"\nmass = 5.0\n#";
+  EXPECT_EQ(ReadingsErrorOf(OneEffectDiagnosis(
+                {{"kind", "added_mass"}, {"target", points}, {"parameters", {{"mass", 0.1}}}})),
+            "DIAG.json: candidate rank 1: effect 1: effect added_mass '" + points +
+                "': bad point id '101\"\nmass = 5.0\n#': expected 'all_points' or 'points:101,102' (test point "
+                "ids separated by commas)");
+  // A name target is any text (the model says whether it names something): it stays that text,
+  // and the parameters stay those given.
+  const std::string name = "mounts\"\nfactor = 9.0\n[[effect]]";
+  const std::vector<DiagnosisReading> r = ReadDiagnosisReadings(
+      OneEffectDiagnosis({{"kind", "stiffness_scale"}, {"target", name}, {"parameters", {{"factor", 2.0}}}}),
+      "DIAG.json", EMA_TEST_TMP_DIR);
+  ASSERT_EQ(r.size(), 1u);
+  ASSERT_EQ(r[0].effects.size(), 1u);
+  EXPECT_EQ(r[0].effects[0].target, model::EffectTarget::Named(name));
+  EXPECT_EQ(r[0].effects[0].parameters, (std::map<std::string, double>{{"factor", 2.0}}));
+}
+
+TEST(DiagnosisReadings, ParametersKeepEveryBit) {
+  const std::vector<double> values = {0.1 + 0.2, 1.0 / 3.0, 5e-324, 1.7976931348623157e308, -0.0, 9007199254740993.0};
+  for (const double v : values) {
+    const nlohmann::json diagnosis =
+        OneEffectDiagnosis({{"kind", "stiffness_scale"}, {"target", "mounts"}, {"parameters", {{"factor", v}}}});
+    // From the JSON itself and from its text in a file.
+    const std::vector<DiagnosisReading> direct = ReadDiagnosisReadings(diagnosis, "DIAG.json", EMA_TEST_TMP_DIR);
+    const std::vector<DiagnosisReading> file = ReadDiagnosisReadings(WriteDiagText("readings-bits.json", diagnosis.dump()));
+    for (const auto* r : {&direct, &file}) {
+      const double got = (*r)[0].effects[0].parameters.at("factor");
+      EXPECT_EQ(std::memcmp(&got, &v, sizeof v), 0) << got << " != " << v;
+    }
+  }
+}
+
+TEST(DiagnosisReadings, LawFieldIsOneInlineTomlValue) {
+  auto law_effect = [](const std::string& law) {
+    return OneEffectDiagnosis({{"kind", "series_compliance"}, {"target", "joints"}, {"law", law}});
+  };
+  // A comment after the value is still the one value.
+  const std::vector<DiagnosisReading> r =
+      ReadDiagnosisReadings(law_effect("{ linear = { k = 6.5e6 } }  # a comment"), "DIAG.json", EMA_TEST_TMP_DIR);
+  ASSERT_TRUE(r[0].effects[0].law);
+  EXPECT_EQ(std::get<model::LinearLaw>(r[0].effects[0].law->value).k, 6.5e6);
+  // Anything after the value on its line is not TOML; a second line is refused as such.
+  EXPECT_NE(ReadingsErrorOf(law_effect("{ linear = { k = 1.0 } }, factor = 2.0"))
+                .find("DIAG.json: candidate rank 1: effect 1: key 'law': '{ linear = { k = 1.0 } }, factor = 2.0' is "
+                      "not the inline TOML of a law"),
+            std::string::npos);
+  EXPECT_EQ(ReadingsErrorOf(law_effect("{ linear = { k = 1.0 } }\nfactor = 2.0")),
+            "DIAG.json: candidate rank 1: effect 1: key 'law': expected the inline TOML of one law on one line, such "
+            "as \"{ linear = { k = 6.5e6 } }\"");
+  // The law parser's own messages, said at the candidate (the law's TOML has no line in any file).
+  EXPECT_EQ(ReadingsErrorOf(law_effect("5.0")),
+            "DIAG.json: candidate rank 1: effect 1: key 'effect series_compliance': expected a table");
+  EXPECT_EQ(ReadingsErrorOf(law_effect("{ linear = { k = 1.0, c = 2.0 } }")),
+            "DIAG.json: candidate rank 1: effect 1: unknown key 'c' in effect series_compliance law linear (allowed: k)");
+}
+
+// A curve file a law names keeps its own place (file and line), after the candidate that names it.
+TEST(DiagnosisReadings, CurveFileErrorsKeepTheirPlace) {
+  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "readings-bad-curve";
+  fs::create_directories(dir);
+  std::ofstream(dir / "curve.csv") << "deflection,force\n0,0\n1e-6,ten\n";
+  const nlohmann::json diagnosis = OneEffectDiagnosis(
+      {{"kind", "series_compliance"}, {"target", "pads"}, {"law", "{ table = { file = \"curve.csv\" } }"}});
+  std::ofstream(dir / "DIAG.json") << diagnosis.dump();
+  try {
+    ReadDiagnosisReadings(dir / "DIAG.json");
+    FAIL() << "a bad curve file was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), (dir / "DIAG.json").string() + ": candidate rank 1: effect 1: " +
+                                         (dir / "curve.csv").string() + ":3: expected two numbers 'x,y'");
+  }
+  const nlohmann::json missing = OneEffectDiagnosis(
+      {{"kind", "series_compliance"}, {"target", "pads"}, {"law", "{ table = { file = \"no-such.csv\" } }"}});
+  EXPECT_EQ(ReadingsErrorOf(missing), "DIAG.json: candidate rank 1: effect 1: cannot open curve file '" +
+                                          (fs::path(EMA_TEST_TMP_DIR) / "no-such.csv").string() + "'");
 }
 
 }  // namespace

@@ -27,14 +27,21 @@ inline std::optional<int> IntValue(const toml::node& n) {
   return static_cast<int>(x);
 }
 
+/// Whether the lines of the TOML read are a file's: kInNoFile for TOML that is a value inside
+/// another format (DIAG.json's "law" string), whose line numbers the user could find nowhere.
+enum class TomlLines { kOfTheFile, kInNoFile };
+
 class TomlFields {
  public:
-  explicit TomlFields(std::string file) : file_(std::move(file)) {}
+  /// `file` names the source in messages: the file, or with kInNoFile the place of the value
+  /// ("DIAG.json: candidate rank 2: effect 1"), which is then every node's place.
+  explicit TomlFields(std::string file, TomlLines lines = TomlLines::kOfTheFile)
+      : file_(std::move(file)), lines_(lines) {}
 
-  /// "file:line" of a node (just "file" when toml++ knows no line).
+  /// "file:line" of a node (just "file" when toml++ knows no line or the lines are in no file).
   std::string At(const toml::node& n) const {
     const auto line = n.source().begin.line;
-    return line > 0 ? file_ + ":" + std::to_string(line) : file_;
+    return line > 0 && lines_ == TomlLines::kOfTheFile ? file_ + ":" + std::to_string(line) : file_;
   }
 
   /// Unknown keys are an error that names the key, its line and the keys allowed there.
@@ -49,6 +56,7 @@ class TomlFields {
 
  protected:
   std::string file_;
+  TomlLines lines_;
 };
 
 }  // namespace ema::formats
