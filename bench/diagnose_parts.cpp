@@ -154,6 +154,30 @@ BENCHMARK(BM_DiagnoseFrame12000Dofs50PartsExactFormNoSwaps)->Unit(benchmark::kMi
 void BM_DiagnoseFrame50000Dofs50Parts(benchmark::State& state) { RunFrame(state, 4166, 30); }
 BENCHMARK(BM_DiagnoseFrame50000Dofs50Parts)->Unit(benchmark::kMillisecond)->Iterations(1);
 
+// One full solve of the frame (its lowest modes by shift-invert, as the diagnosis's checks and
+// the centres of its reduced models make them): where the large cases' time goes (#39).
+void RunFrameSolve(benchmark::State& state, int segments) {
+  testing::FrameSpec spec;
+  spec.segments = segments;
+  spec.zones = 30;
+  const fs::path dir = fs::temp_directory_path() / ("ema-bench-frame-solve-" + std::to_string(segments));
+  const testing::FrameFiles files = testing::WriteFrame(dir, spec);
+  const model::Model nominal = formats::ReadModelFile(files.model);
+  model::SolveOptions so;
+  so.max_modes = 30;
+  model::Solution s;
+  for (auto _ : state) s = model::Solve(nominal, so);
+  state.counters["dofs"] = files.dofs;
+  state.counters["modes"] = static_cast<double>(s.modes.modes.size());
+  state.counters["f1_hz"] = s.modes.modes.empty() ? 0.0 : s.modes.modes[0].frequency_hz;
+  state.counters["f30_hz"] = s.modes.modes.empty() ? 0.0 : s.modes.modes.back().frequency_hz;
+  fs::remove_all(dir);
+}
+void BM_FullSolveFrame12000Dofs(benchmark::State& state) { RunFrameSolve(state, 1000); }
+BENCHMARK(BM_FullSolveFrame12000Dofs)->Unit(benchmark::kMillisecond)->Iterations(3);
+void BM_FullSolveFrame50000Dofs(benchmark::State& state) { RunFrameSolve(state, 4166); }
+BENCHMARK(BM_FullSolveFrame50000Dofs)->Unit(benchmark::kMillisecond)->Iterations(3);
+
 }  // namespace
 
 BENCHMARK_MAIN();
