@@ -23,8 +23,8 @@ function(ema_add_module name)
 endfunction()
 
 # CHOLMOD (SuiteSparse; Debian's libsuitesparse-dev), PRIVATE to `target` with EMA_HAVE_CHOLMOD
-# defined: the supernodal sparse Cholesky of model/ (shift-invert solves, reduced models) and of
-# formats/ (`ema fe-import`'s positive semi-definiteness check). Debian 12's SuiteSparse 5 ships no
+# defined: the supernodal sparse Cholesky of model/ (shift-invert solves, reduced models, and
+# CheckPositiveDefinite, which `ema fe-import` checks each part with). Debian 12's SuiteSparse 5 ships no
 # CMake package, so its header and library are found directly; without them Eigen's SimplicialLDLT
 # factorises (the same results, slower on large 3-D meshes).
 function(ema_link_cholmod target)

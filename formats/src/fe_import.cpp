@@ -1,6 +1,5 @@
 // `ema fe-import`'s parts (fe_import.hpp): the difference of two assemblies, sparse, with the
 // checks the bolted-frame sample's script made on dense matrices (docs/fe-parts.md).
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -15,10 +14,7 @@
 #include "ema/formats/atomic_file.hpp"
 #include "ema/formats/fe_import.hpp"
 #include "ema/formats/matrix_market.hpp"
-
-#ifdef EMA_HAVE_CHOLMOD
-#include <cholmod.h>
-#endif
+#include "ema/model/definiteness.hpp"
 
 namespace ema::formats {
 
@@ -105,47 +101,6 @@ std::pair<Eigen::Index, Eigen::Index> OffPattern(const Sparse& part, const Spars
   return {-1, -1};
 }
 
-#ifdef EMA_HAVE_CHOLMOD
-// The row (of `a`, lower triangle) where CHOLMOD's LLᵀ of `a` breaks, or -1 when `a` is positive
-// definite.
-Eigen::Index CholmodFirstFailure(Sparse* a) {
-  a->makeCompressed();
-  cholmod_common c;
-  cholmod_start(&c);
-  c.print = 0;
-  c.error_handler = nullptr;
-  c.quick_return_if_not_posdef = 1;
-  c.supernodal = CHOLMOD_SUPERNODAL;  // always LLᵀ (the simplicial LDLᵀ takes negative pivots)
-  cholmod_sparse view{};
-  view.nrow = view.ncol = static_cast<std::size_t>(a->rows());
-  view.nzmax = static_cast<std::size_t>(a->nonZeros());
-  view.p = a->outerIndexPtr();
-  view.i = a->innerIndexPtr();
-  view.x = a->valuePtr();
-  view.stype = -1;  // the lower triangle
-  view.itype = CHOLMOD_INT;
-  view.xtype = CHOLMOD_REAL;
-  view.dtype = CHOLMOD_DOUBLE;
-  view.sorted = 1;
-  view.packed = 1;
-  cholmod_factor* factor = cholmod_analyze(&view, &c);
-  Eigen::Index bad = -1;
-  int status = c.status;
-  if (factor) {
-    cholmod_factorize(&view, factor, &c);
-    status = c.status;
-    if (status == CHOLMOD_NOT_POSDEF && factor->minor < factor->n)
-      bad = static_cast<const int*>(factor->Perm)[factor->minor];
-    cholmod_free_factor(&factor, &c);
-  }
-  cholmod_finish(&c);
-  if (status != CHOLMOD_OK && status != CHOLMOD_NOT_POSDEF)
-    throw std::runtime_error("the sparse Cholesky factorisation (CHOLMOD) failed, status " + std::to_string(status) +
-                             (status == CHOLMOD_OUT_OF_MEMORY ? " (out of memory)" : ""));
-  return bad;
-}
-#endif
-
 // Positive semi-definiteness of a part on its own rows: LDLᵀ of K + τI, τ = tolerance × max diagonal.
 void RequirePositiveSemiDefinite(const FeImportedPart& part, const std::vector<FeDof>& dofs, double tolerance) {
   const Sparse& k = part.stiffness;
@@ -168,33 +123,9 @@ void RequirePositiveSemiDefinite(const FeImportedPart& part, const std::vector<F
   for (Eigen::Index i = 0; i < m; ++i) t.emplace_back(i, i, tau);
   Sparse a(m, m);
   a.setFromTriplets(t.begin(), t.end());
-  Eigen::Index bad = -1, negative = 0;
-#ifdef EMA_HAVE_CHOLMOD
-  // CHOLMOD's supernodal LLᵀ (FE-sized parts): where it breaks, when it does.
-  bad = CholmodFirstFailure(&a);
-  if (bad < 0) return;
-  if (m > 5000) negative = -1;  // not counted: an LDLᵀ of a large part is slow
-#endif
-  if (negative == 0) {
-    Eigen::SimplicialLDLT<Sparse, Eigen::Lower> ldlt(a);
-    if (ldlt.info() == Eigen::Success) {
-      // D in elimination order; the first non-positive pivot is where an LLᵀ would have broken.
-      const Eigen::VectorXd d = ldlt.vectorD();
-      const auto& perm = ldlt.permutationP().indices();  // original row → elimination position
-      std::vector<Eigen::Index> original(static_cast<std::size_t>(m));
-      for (Eigen::Index i = 0; i < m; ++i) original[static_cast<std::size_t>(perm[i])] = i;
-      Eigen::Index first = -1;
-      for (Eigen::Index k2 = 0; k2 < m; ++k2)
-        if (!(d[k2] > 0.0)) {
-          if (first < 0) first = original[static_cast<std::size_t>(k2)];
-          ++negative;
-        }
-      if (bad < 0) bad = first;
-    } else if (bad < 0) {
-      bad = 0;  // an exactly zero pivot: not positive definite, row unknown
-    }
-  }
-  if (bad < 0) return;
+  const model::DefinitenessCheck check = model::CheckPositiveDefinite(a);
+  if (check.PositiveDefinite()) return;
+  const Eigen::Index bad = check.first_failure, negative = check.non_positive_pivots;
   const Eigen::Index row = rows[static_cast<std::size_t>(bad)];
   throw InputError(part.source.string() + ", row " + std::to_string(row + 1) + " (DOF " +
                        FeDofText(dofs[static_cast<std::size_t>(row)]) + ")",
