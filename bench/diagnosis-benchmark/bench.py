@@ -6,6 +6,7 @@
   bench.py check  --ema EMA --cases 0:21 --floor 0.9 [--work DIR]      (the CI test)
   bench.py run    --ema EMA --family form --cases 0:60 [--jobs N]       (the model-form family)
   bench.py run    --ema EMA --cases 0:200 --replan                        (look-alikes: the follow-up test ema plan makes)
+  bench.py run    --ema EMA --family lookalike --cases 0:10 --replan      (mirror pairs tied by the first test)
   bench.py run    --ema EMA --keep ... then --reuse --diagnose-arg=--shape-residual --diagnose-arg=mac
                   (the same simulated tests diagnosed with other options)
 
@@ -85,8 +86,8 @@ def choose_band(frequencies, family, damping, single_setup=True):
     2026 before 2026-11-26: both missed by the fit, reduced chi-square 46).
     Returns (lo, hi, sample rate, samples, modes in the band, contact time)."""
     f = sorted(x for x in frequencies if x > 1.0)
-    keep = ([x for x in f if x < 2000.0] if family not in ("fe", "parts", cases.FORM_FAMILY)
-            else [x for x in f if x < 2500.0][:8 if family == "parts" else 6])
+    keep = ([x for x in f if x < 2000.0] if family not in ("fe", "parts", cases.FORM_FAMILY, cases.LOOKALIKE_FAMILY)
+            else [x for x in f if x < 2500.0][:8 if family in ("parts", cases.LOOKALIKE_FAMILY) else 6])
     if len(keep) < 2:
         keep = f[:2]
     lo = 0.75 * keep[0]
@@ -443,8 +444,10 @@ def main():
         q.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"benchmark seed (default {DEFAULT_SEED})")
         q.add_argument("--work", default="diagnosis-benchmark-work", help="folder for cases and scores")
         q.add_argument("--keep", action="store_true", help="keep each case's files (default: scores only)")
-        q.add_argument("--family", choices=[cases.FORM_FAMILY], default=None,
-                       help="the model-form family (truth richer than the model; default: the four families)")
+        q.add_argument("--family", choices=[cases.FORM_FAMILY, cases.LOOKALIKE_FAMILY], default=None,
+                       help="the model-form family (truth richer than the model) or the look-alike family "
+                            "(mirror pairs a first test at mid-span cannot tell apart; with --replan); "
+                            "default: the four families")
         q.add_argument("--replan", action="store_true",
                        help="when rank 1 has look-alikes, plan the follow-up test (ema plan --candidates --keep), "
                             "test again and diagnose (docs/plan.md)")

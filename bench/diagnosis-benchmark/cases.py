@@ -352,8 +352,10 @@ def _rotate(k, axis):
     return [[sum(t[c][a] * kt[c][b] for c in range(12)) for b in range(12)] for a in range(12)]
 
 
-def build_parts(rng, files):
-    """A two-girder footbridge frame built from parts: 3D beams, lumped mass, massless rotations."""
+def build_parts(rng, files, symmetric=False):
+    """A two-girder footbridge frame built from parts: 3D beams, lumped mass, massless rotations.
+    `symmetric`: the four bearings equally stiff (the frame mirror-symmetric about mid-span) and
+    test points at mid-span too (the look-alike family)."""
     segments = rng.choice((12, 16, 20))
     zones = 4
     length, width = rng.uniform(5.0, 10.0), rng.uniform(1.2, 2.5)
@@ -398,7 +400,8 @@ def build_parts(rng, files):
         element("deck", 0, i, 1, i, deck, 0.0)
     bearing_k = rng.uniform(2e8, 8e8)
     for b, (g, i) in enumerate(((0, 0), (1, 0), (0, segments), (1, segments)), start=1):
-        parts[f"B{b}"] = {(dof(g, i, d), dof(g, i, d)): bearing_k * rng.uniform(0.7, 1.3) for d in range(3)}
+        spread = 1.0 if symmetric else rng.uniform(0.7, 1.3)
+        parts[f"B{b}"] = {(dof(g, i, d), dof(g, i, d)): bearing_k * spread for d in range(3)}
         order.append(f"B{b}")
     files["fe/M.mtx"] = write_mtx(n, {(r, r): v for r, v in enumerate(mass) if v})
     fe = '[fe]\nmass = "fe/M.mtx"\ndofs = "fe/dofs.csv"\nnodes = "fe/nodes.csv"\n\n'
@@ -417,8 +420,12 @@ def build_parts(rng, files):
                                                      for g in range(2) for i in range(per))
     m.fe_mass = sum(mass[dof(g, i, 2)] for g in range(2) for i in range(per))
     for g in range(2):
-        for i in range(1, segments, max(1, segments // 6)):
+        inner = list(range(1, segments, max(1, segments // 6)))
+        if symmetric and segments // 2 not in inner:
+            inner = sorted(inner + [segments // 2])
+        for i in inner:
             m.point(1000 * (g + 1) + i, node=1000 * (g + 1) + i)
+    m.segments = segments
     return m, [None]
 
 
@@ -524,6 +531,42 @@ def draw_parameter(rng, kind, target, m, mean_k, fe_mass):
 FORM_FAMILY = "form"
 FORM_EFFECT_COUNTS = (0, 1, 2)
 
+# The look-alike family (issue 40; bench.py --family lookalike --replan): the footbridge frame made
+# mirror-symmetric about mid-span, the truth one of a mirror pair — a point mass at a test point or
+# at its mirror point (cases 0, 1, 2 of every 5), bearing B1 or its mirror B3 softened (3, 4) —
+# and a first test whose sensors and hammer sit at mid-span only, on the mirror plane, measuring
+# lateral and vertical motion, where the two readings give the same data: they are tied by
+# construction. What `ema plan --candidates`
+# adds must tell them apart. Noise by index % 3 among 0.5, 1 and 2 % (a good hammer test's).
+LOOKALIKE_FAMILY = "lookalike"
+LOOKALIKE_NOISE_LEVELS = (0.005, 0.01, 0.02)
+
+
+def lookalike_case(rng, index, files):
+    """The look-alike family's model, truth (one effect) and its first plan's points."""
+    m, setups = build_parts(rng, files, symmetric=True)
+    n = m.segments
+    mid = n // 2
+    if index % 5 < 3:
+        # A test point off mid-span whose mirror point is a test point too (on either girder).
+        ids = {p["id"] for p in m.points}
+        pairs = [(pid, pid - pid % 1000 + n - pid % 1000) for pid in sorted(ids)
+                 if pid % 1000 != mid and pid - pid % 1000 + n - pid % 1000 in ids and pid % 1000 < mid]
+        a, b = rng.choice(pairs)
+        target = f"points:{a if index % 2 == 0 else b}"
+        fe_mass = m.fe_mass
+        params, line = draw_parameter(rng, "added_mass", target, m, 1.0, fe_mass)
+        truth = {"kind": "added_mass", "target": target}
+    else:
+        target = "bearings/B1" if index % 2 == 0 else "bearings/B3"
+        v = log_uniform(rng, 0.15, 0.4)
+        params, line = {"factor": v}, f"factor = {fmt(v)}"
+        truth = {"kind": "stiffness_scale", "target": target}
+    truth["parameters"] = params
+    block = f'[[effect]]\nkind = "{truth["kind"]}"\ntarget = "{truth["target"]}"\n{line}\n\n'
+    mid_points = [1000 + mid, 2000 + mid]
+    return m, setups, truth, block, mid_points
+
 
 def make_case(index, seed, attempt=0, family=None):
     """The case: files to write (relative path -> text), the truth and the test plans. `attempt` > 0
@@ -531,6 +574,8 @@ def make_case(index, seed, attempt=0, family=None):
     `family` FORM_FAMILY: the model-form family (its own draws; the four families' cases are
     unchanged)."""
     form = family == FORM_FAMILY
+    if family == LOOKALIKE_FAMILY:
+        return make_lookalike_case(index, seed, attempt)
     rng = random.Random(f"diagnosis-benchmark:{seed}:{index}" + (":form" if form else "") + (f":{attempt}" if attempt else ""))
     if form:
         noise = NOISE_LEVELS[index % 3]
@@ -617,6 +662,33 @@ def make_case(index, seed, attempt=0, family=None):
             "effect_blocks": blocks,
             "sensor_mass": plan["sensor_mass"], "sensor_points": plan["sensor_points"],
             "references": plan["references"], "files": files}
+
+
+def make_lookalike_case(index, seed, attempt=0):
+    """make_case for the look-alike family: the first test at mid-span only — its sensors lateral
+    and vertical at the two mid-span points, the hammer there vertically and laterally. Not
+    longitudinal: the mirror turns +X into −X, so an X sensor on the mirror plane tells a mirror
+    pair apart by the sign of its motion against the others'."""
+    rng = random.Random(f"diagnosis-benchmark:{seed}:{index}:lookalike" + (f":{attempt}" if attempt else ""))
+    noise = LOOKALIKE_NOISE_LEVELS[index % 3]
+    files = {}
+    m, setups, truth, block, mid_points = lookalike_case(rng, index, files)
+    sensor_mass = log_uniform(rng, 0.01, 0.1)
+    impacts = rng.choice((3, 4, 5))
+    sensors = [f"{p}{d}" for p in mid_points for d in ("+Y", "+Z")]
+    references = [f"{mid_points[0]}+Z", f"{mid_points[1]}+Y"]
+    lines = ["[plan]", "references = [" + ", ".join(f'"{r}"' for r in references) + "]",
+             "sample_rate_hz = {fs}", "samples = {samples}", f"impacts = {impacts}", "force_peak_n = 100.0",
+             "pulse_duration_s = {pulse}", f"force_noise = {fmt(noise / 2)}", f"response_noise = {fmt(noise)}",
+             f"sensor_mass = {fmt(sensor_mass)}", "seed = {plan_seed}", "",
+             "[[set]]", 'name = "set 1"', "sensors = [" + ", ".join(f'"{d}"' for d in sensors) + "]", ""]
+    files["nominal.toml"] = m.text(mid_points, sensor_mass)
+    files["truth.toml"] = files["nominal.toml"] + "\n" + block
+    files["simulate.toml"] = m.text() + "\n" + block
+    files["plan.toml"] = "\n".join(lines) + "\n"
+    return {"index": index, "seed": seed, "attempt": attempt, "family": LOOKALIKE_FAMILY, "noise": noise,
+            "truth": [truth], "setups": setups, "form_error": None, "effect_blocks": [block],
+            "sensor_mass": sensor_mass, "sensor_points": mid_points, "references": references, "files": files}
 
 
 def _parse_mtx(text):
