@@ -548,10 +548,12 @@ def lookalike_case(rng, index, files):
     n = m.segments
     mid = n // 2
     if index % 5 < 3:
-        # A test point off mid-span whose mirror point is a test point too (on either girder).
+        # A test point off mid-span whose mirror point is a test point too (on either girder), not
+        # the one beside a bearing: a mass there hardly moves the modes a mid-span test sees, and
+        # an effect the first test cannot see is no look-alike question.
         ids = {p["id"] for p in m.points}
         pairs = [(pid, pid - pid % 1000 + n - pid % 1000) for pid in sorted(ids)
-                 if pid % 1000 != mid and pid - pid % 1000 + n - pid % 1000 in ids and pid % 1000 < mid]
+                 if 1 < pid % 1000 < mid and pid - pid % 1000 + n - pid % 1000 in ids]
         a, b = rng.choice(pairs)
         target = f"points:{a if index % 2 == 0 else b}"
         fe_mass = m.fe_mass
@@ -559,7 +561,7 @@ def lookalike_case(rng, index, files):
         truth = {"kind": "added_mass", "target": target}
     else:
         target = "bearings/B1" if index % 2 == 0 else "bearings/B3"
-        v = log_uniform(rng, 0.15, 0.4)
+        v = log_uniform(rng, 0.05, 0.2)  # a bearing mostly lost: visible at mid-span
         params, line = {"factor": v}, f"factor = {fmt(v)}"
         truth = {"kind": "stiffness_scale", "target": target}
     truth["parameters"] = params
