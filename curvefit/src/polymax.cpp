@@ -410,8 +410,12 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
   solve_time.assign(n_threads, 0.0);
   eig_time.assign(n_threads, 0.0);
   const double band_lo = diagram.band_lo_hz, band_hi = diagram.band_hi_hz;
+  // Set under the progress lock by the thread whose callback threw: every other thread sees it
+  // at its next report or order, however the threads are scheduled (the pool's own stop flag is
+  // set only once the exception has left the worker).
+  std::atomic<bool> cancelled{false};
   auto worker = [&](int tid, const std::atomic<bool>& stop) {
-    while (!stop.load(std::memory_order_relaxed)) {
+    while (!stop.load(std::memory_order_relaxed) && !cancelled.load()) {
       // Largest orders first: better load balance.
       const int idx = next.fetch_add(1);
       if (idx >= n_orders) break;
@@ -477,7 +481,13 @@ StabilisationDiagram EstimatePoles(const FitData& data, const PolymaxOptions& op
       const int finished = ++done;
       if (progress) {
         std::lock_guard<std::mutex> lock(progress_mutex);
-        progress(static_cast<double>(finished) / n_orders, "poles");
+        if (cancelled.load()) break;
+        try {
+          progress(static_cast<double>(finished) / n_orders, "poles");
+        } catch (...) {
+          cancelled.store(true);
+          throw;
+        }
       }
     }
   };

@@ -57,9 +57,10 @@ TEST(Cancel, ThrownFromAPolymaxWorkerStopsTheFitAndReachesTheCaller) {
   };
   EXPECT_THROW(Fit(frfs, options, "cancel", progress), Cancelled);
   EXPECT_TRUE(thrown);
-  // The other two threads each finish the order they are in and stop: at most one more order
-  // each, of the 60.
-  EXPECT_LE(orders_after, 2);
+  // The other threads each finish the order they are in and stop without reporting it: the
+  // cancellation is seen under the progress lock, whatever the scheduling (a loaded machine once
+  // let them report 6 more orders while the thrower was descheduled).
+  EXPECT_EQ(orders_after, 0);
   EXPECT_LT(orders_done + orders_after, 20);
 }
 
