@@ -107,7 +107,13 @@ def write_joint_deck(path, n, parts, moduli, size, node):
 
 
 def timed(cmd):
-    """Runs cmd under /usr/bin/time -v: (CompletedProcess, wall text, peak RSS in GB)."""
+    """Runs cmd under /usr/bin/time -v: (CompletedProcess, wall text, peak RSS in GB). Without
+    /usr/bin/time (Debian's `time` package: not on every machine) the wall time is measured here
+    and the peak memory is not known."""
+    if not os.path.isfile("/usr/bin/time"):
+        t0 = time.perf_counter()
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        return r, "%.2f s" % (time.perf_counter() - t0), float("nan")
     r = subprocess.run(["/usr/bin/time", "-v"] + cmd, capture_output=True, text=True)
     wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)", r.stderr)
     rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", r.stderr)
