@@ -269,7 +269,7 @@ def replan(ema, case, folder, tests, lo, hi, times, index):
     with open(os.path.join(folder, "nominal.toml"), "rb") as f:
         candidates = 3 * len(tomllib.load(f).get("point", []))
     free = candidates - len({x for st in sets for x in st})
-    per_set = min(len(sets[0]) if sets else 8, free)
+    per_set = min(REPLAN_SENSORS or (len(sets[0]) if sets else 8), free)
     if per_set < 1:
         return {"readings": [f"{c['kind']} on {c['target']}" for c in readings], "skipped": "every DOF already measured"}
     args = ["plan", "nominal.toml", "--candidates", "diag.json", "--keep", kept, "--sensors", str(per_set),
@@ -409,12 +409,14 @@ def parse_range(text):
 # compare diagnosis options on the same simulated tests.
 DIAGNOSE_ARGS = []
 REUSE_TESTS = False
+REPLAN_SENSORS = 0  # --replan-sensors: the follow-up set's DOFs (0: as many as the first set)
 
 
 def run_range(args):
-    global REUSE_TESTS
+    global REUSE_TESTS, REPLAN_SENSORS
     DIAGNOSE_ARGS[:] = getattr(args, "diagnose_arg", None) or []
     REUSE_TESTS = getattr(args, "reuse", False)
+    REPLAN_SENSORS = getattr(args, "replan_sensors", 0) or 0
     if not (os.path.isfile(args.ema) and os.access(args.ema, os.X_OK)):
         print(f"bench.py: the ema executable is missing or not executable: {args.ema}", file=sys.stderr)
         sys.exit(2)
@@ -460,6 +462,8 @@ def main():
         q.add_argument("--replan", action="store_true",
                        help="when rank 1 has look-alikes, plan the follow-up test (ema plan --candidates --keep), "
                             "test again and diagnose (docs/plan.md)")
+        q.add_argument("--replan-sensors", type=int, default=0,
+                       help="DOFs of the follow-up set (default: as many as the first test's first set)")
         q.add_argument("--diagnose-arg", action="append", default=[],
                        help="an extra `ema diagnose` argument (repeat for several: --diagnose-arg=--shape-residual "
                             "--diagnose-arg=mac)")
