@@ -679,15 +679,10 @@ def make_lookalike_case(index, seed, attempt=0):
     impacts = rng.choice((3, 4, 5))
     sensors = [f"{p}{d}" for p in mid_points for d in ("+Y", "+Z")]
     references = [f"{mid_points[0]}+Z", f"{mid_points[1]}+Y"]
-    lines = ["[plan]", "references = [" + ", ".join(f'"{r}"' for r in references) + "]",
-             "sample_rate_hz = {fs}", "samples = {samples}", f"impacts = {impacts}", "force_peak_n = 100.0",
-             "pulse_duration_s = {pulse}", f"force_noise = {fmt(noise / 2)}", f"response_noise = {fmt(noise)}",
-             f"sensor_mass = {fmt(sensor_mass)}", "seed = {plan_seed}", "",
-             "[[set]]", 'name = "set 1"', "sensors = [" + ", ".join(f'"{d}"' for d in sensors) + "]", ""]
     files["nominal.toml"] = m.text(mid_points, sensor_mass)
     files["truth.toml"] = files["nominal.toml"] + "\n" + block
     files["simulate.toml"] = m.text() + "\n" + block
-    files["plan.toml"] = "\n".join(lines) + "\n"
+    files["plan.toml"] = plan_text(references, impacts, noise, sensor_mass, [sensors])
     return {"index": index, "seed": seed, "attempt": attempt, "family": LOOKALIKE_FAMILY, "noise": noise,
             "truth": [truth], "setups": setups, "form_error": None, "effect_blocks": [block],
             "sensor_mass": sensor_mass, "sensor_points": mid_points, "references": references, "files": files}
@@ -740,14 +735,20 @@ def draw_plan(rng, family, m, noise, seed, index):
             sets = [[f"{p}{d}" for p in sensor_points for d in ("+X", "+Y")], [f"{p}+Z" for p in sensor_points]]
         sensor_mass = log_uniform(rng, 0.002, 0.03)
     impacts = rng.choice((3, 4, 5))
+    return {"text": plan_text(references, impacts, noise, sensor_mass, sets), "sensor_points": sensor_points,
+            "references": references, "sensor_mass": sensor_mass}
+
+
+def plan_text(references, impacts, noise, sensor_mass, sets):
+    """The plan file of a case; {fs}, {samples}, {pulse} and {plan_seed} are filled in by bench.py
+    once the band is known."""
     lines = ["[plan]", "references = [" + ", ".join(f'"{r}"' for r in references) + "]",
              "sample_rate_hz = {fs}", "samples = {samples}", f"impacts = {impacts}", "force_peak_n = 100.0",
              "pulse_duration_s = {pulse}", f"force_noise = {fmt(noise / 2)}", f"response_noise = {fmt(noise)}",
              f"sensor_mass = {fmt(sensor_mass)}", "seed = {plan_seed}", ""]
     for i, s in enumerate(sets, start=1):
         lines += ["[[set]]", f'name = "set {i}"', "sensors = [" + ", ".join(f'"{d}"' for d in s) + "]", ""]
-    return {"text": "\n".join(lines) + "\n", "sensor_points": sensor_points, "references": references,
-            "sensor_mass": sensor_mass}
+    return "\n".join(lines) + "\n"
 
 
 def write_case(case, folder):

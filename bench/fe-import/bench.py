@@ -38,53 +38,27 @@ def joint_layers(nz, parts):
 
 
 def write_deck(path, n, parts, moduli, size=(0.02, 0.02, 0.0025), joints=False):
+    """The clamped bar's deck: PARTS segments P1..PN along it (moduli[p]), or with `joints` PARTS
+    one-layer joints J1..JN (moduli[p]) in a bar of steel (ELSET BAR, the rest of the layers)."""
     nx, ny, nz = n  # elements along y, z (section) and x (length): nz is the bar's axis
+    if joints:
+        layers = joint_layers(nz, parts)
+        title = "a clamped C3D8 bar with %d one-layer joints" % parts
+        sets = [("BAR", [k for k in range(nz) if k not in layers], E, "M_BAR")] + \
+               [("J%d" % (p + 1), [layers[p]], moduli[p], "M_J%d" % (p + 1)) for p in range(parts)]
+    else:
+        per = [nz * p // parts for p in range(parts + 1)]
+        title = "a clamped C3D8 bar, %d parts" % parts
+        sets = [("P%d" % (p + 1), range(per[p], per[p + 1]), moduli[p], "M%d" % (p + 1)) for p in range(parts)]
     sx, sy, sz = size
     node = lambda i, j, k: 1 + i + (nx + 1) * (j + (ny + 1) * k)
-    if joints:
-        return write_joint_deck(path, n, parts, moduli, size, node)
-    out = ["** bench/fe-import/bench.py: a clamped C3D8 bar, %d parts" % parts, "*NODE, NSET=NALL"]
-    for k in range(nz + 1):
-        for j in range(ny + 1):
-            for i in range(nx + 1):
-                out.append("%d, %.9g, %.9g, %.9g" % (node(i, j, k), i * sx, j * sy, k * sz))
-    per = [nz * p // parts for p in range(parts + 1)]
-    e = 0
-    for p in range(parts):
-        out.append("*ELEMENT, TYPE=C3D8, ELSET=P%d" % (p + 1))
-        for k in range(per[p], per[p + 1]):
-            for j in range(ny):
-                for i in range(nx):
-                    e += 1
-                    c = [node(i, j, k), node(i + 1, j, k), node(i + 1, j + 1, k), node(i, j + 1, k)]
-                    t = [node(i, j, k + 1), node(i + 1, j, k + 1), node(i + 1, j + 1, k + 1), node(i, j + 1, k + 1)]
-                    out.append(", ".join(str(v) for v in [e] + c + t))
-    out.append("*NSET, NSET=NBASE")
-    base = [node(i, j, 0) for j in range(ny + 1) for i in range(nx + 1)]
-    for i in range(0, len(base), 12):
-        out.append(", ".join(str(v) for v in base[i:i + 12]))
-    out += ["*BOUNDARY", "NBASE, 1, 3"]
-    for p in range(parts):
-        out += ["*MATERIAL, NAME=M%d" % (p + 1), "*ELASTIC", "%r, %r" % (moduli[p], NU), "*DENSITY", "%r" % RHO,
-                "*SOLID SECTION, ELSET=P%d, MATERIAL=M%d" % (p + 1, p + 1)]
-    out += ["*STEP", "*FREQUENCY, SOLVER=MATRIXSTORAGE", "10", "*END STEP"]
-    with open(path, "w") as f:
-        f.write("\n".join(out) + "\n")
-
-
-def write_joint_deck(path, n, parts, moduli, size, node):
-    """The bar with PARTS one-layer joints J1..JN (moduli[p]) in a bar of steel (ELSET BAR)."""
-    nx, ny, nz = n
-    sx, sy, sz = size
-    layers = joint_layers(nz, parts)
-    out = ["** bench/fe-import/bench.py: a clamped C3D8 bar with %d one-layer joints" % parts, "*NODE, NSET=NALL"]
+    out = ["** bench/fe-import/bench.py: " + title, "*NODE, NSET=NALL"]
     for k in range(nz + 1):
         for j in range(ny + 1):
             for i in range(nx + 1):
                 out.append("%d, %.9g, %.9g, %.9g" % (node(i, j, k), i * sx, j * sy, k * sz))
     e = 0
-    for name, ks in [("BAR", [k for k in range(nz) if k not in layers])] + \
-                    [("J%d" % (p + 1), [layers[p]]) for p in range(parts)]:
+    for name, ks, _, _ in sets:  # each element set: its layers of elements along the bar
         out.append("*ELEMENT, TYPE=C3D8, ELSET=%s" % name)
         for k in ks:
             for j in range(ny):
@@ -98,9 +72,9 @@ def write_joint_deck(path, n, parts, moduli, size, node):
     for i in range(0, len(base), 12):
         out.append(", ".join(str(v) for v in base[i:i + 12]))
     out += ["*BOUNDARY", "NBASE, 1, 3"]
-    for name, modulus in [("BAR", E)] + [("J%d" % (p + 1), moduli[p]) for p in range(parts)]:
-        out += ["*MATERIAL, NAME=M_%s" % name, "*ELASTIC", "%r, %r" % (modulus, NU), "*DENSITY", "%r" % RHO,
-                "*SOLID SECTION, ELSET=%s, MATERIAL=M_%s" % (name, name)]
+    for name, _, modulus, material in sets:
+        out += ["*MATERIAL, NAME=%s" % material, "*ELASTIC", "%r, %r" % (modulus, NU), "*DENSITY", "%r" % RHO,
+                "*SOLID SECTION, ELSET=%s, MATERIAL=%s" % (name, material)]
     out += ["*STEP", "*FREQUENCY, SOLVER=MATRIXSTORAGE", "10", "*END STEP"]
     with open(path, "w") as f:
         f.write("\n".join(out) + "\n")
