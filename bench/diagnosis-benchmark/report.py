@@ -210,11 +210,81 @@ def tables(rows):
     return "\n".join(lines) + "\n", bins, brier
 
 
+BEGIN_FORM = "<!-- BEGIN GENERATED: bench.py gather, model-form family -->"
+
+
+def visible_right(r):
+    """Rank 1 holds every hidden effect that stands clearly above the model error (moves a mode by
+    ≥ 3× its rms, bench.py form_scores) and nothing that was not hidden: an effect below the model's
+    own error is one no reading of these data can be asked to find."""
+    rms = r["form_error_rms_pct"]
+    truth = [(e["kind"], e["target"]) for e in r["truth"]]
+    visible = {t for t, x in zip(truth, r.get("effect_shift_pct", [])) if x >= 3.0 * rms}
+    kinds, targets = r["rank1"]["kind"].split("+"), r["rank1"]["target"].split("+")
+    rank1 = set() if kinds == ["none"] else set(zip(kinds, targets))
+    return visible <= rank1 <= set(truth)
+
+
+def form_tables(rows):
+    """The model-form family's scores against issue 37's goals (docs/diagnosis-benchmark.md
+    "Model-form error"), all cases and those at 0.5–2 % noise, and its calibration."""
+    def brier(sel, right):
+        return sum((r["p_rank1"] - (1.0 if right(r) else 0.0)) ** 2 for r in sel) / max(1, len(sel))
+
+    def cells(sel):
+        clear = [r for r in sel if r["effects_clear"]]
+        none = [r for r in sel if not r["truth"]]
+        exceeds = [r for r in sel if r["form_exceeds_noise"]]
+        high = [r for r in sel if r["p_rank1"] >= 0.9]
+        return [pct(sum(r["right"] for r in clear), len(clear)), pct(sum(r["invented"] for r in none), len(none)),
+                pct(sum(r["said_inadequate"] for r in exceeds), len(exceeds)),
+                f"{brier(sel, lambda r: r['right']):.3f}", f"{brier(sel, visible_right):.3f}",
+                pct(sum(r["right"] for r in high), len(high)), pct(sum(r["right"] for r in sel), len(sel))]
+
+    low = [r for r in rows if r["noise"] <= 0.02 + 1e-12]
+    names = ["rank 1 right, hidden effects clearly beyond the model error", "discrete effect invented, none hidden",
+             "\"not adequate\" said where the model error exceeds the noise", "Brier score of rank 1's probability",
+             "Brier score, right = every clearly visible hidden effect and nothing not hidden",
+             "rank 1 at p ≥ 0.9 right", "rank 1 right, all cases"]
+    goals = ["≥ 90 %", "≤ 5 %", "≥ 90 %", "≤ 0.10", "–", "≥ 85 %", "–"]
+    a, b = cells(rows), cells(low)
+    lines = [f"Model-form family: {len(rows)} cases (seed {rows[0]['seed']}), {len(low)} of them at 0.5–2 % noise.\n",
+             "| score | all cases | at 0.5–2 % noise | goal (issue 37, at 0.5–2 % noise) |", "|---|---|---|---|"]
+    lines += [f"| {n} | {x} | {y} | {g} |" for n, x, y, g in zip(names, a, b, goals)]
+    bins, _ = calibration(low)
+    lines.append("\nCalibration at 0.5–2 % noise: rank 1's probability against how often rank 1 was right\n")
+    lines.append("| probability bin | cases | mean probability | observed right | right |")
+    lines.append("|---|---|---|---|---|")
+    for c in bins:
+        if c["n"]:
+            lines.append(f"| {c['lo']:.2f}–{c['hi']:.2f} | {c['n']} | {c['mean_predicted']:.3f} | "
+                         f"{c['observed']:.3f} ± {c['sigma']:.3f} | {c['right']} |")
+    missed = [r for r in low if (r["effects_clear"] and not r["right"]) or r["invented"]
+              or (r["form_exceeds_noise"] and not r["said_inadequate"])]
+    lines.append(f"\nCases at 0.5–2 % noise that miss a goal ({len(missed)}):\n")
+    lines.append("| case | noise | model error rms | truth (largest shift per effect) | rank 1 (probability) | misses |")
+    lines.append("|---|---|---|---|---|---|")
+    for r in missed:
+        why = [w for w, bad in (("clear effect wrong", r["effects_clear"] and not r["right"]),
+                                ("invented", r["invented"]),
+                                ("adequate said", r["form_exceeds_noise"] and not r["said_inadequate"])) if bad]
+        truth = " + ".join(f"{e['kind']} {e['target']} ({x:.2f} %)"
+                           for e, x in zip(r["truth"], r.get("effect_shift_pct", []))) or "none"
+        lines.append(f"| {r['index']} | {100 * r['noise']:.1f} % | {r['form_error_rms_pct']:.2f} % | {truth} | "
+                     f"{r['rank1']['kind']} {r['rank1']['target']} ({r['p_rank1']:.2f}) | {', '.join(why)} |")
+    return "\n".join(lines) + "\n"
+
+
 def gather(work, doc, svg_path):
     rows = load(work)
     if not rows:
         raise SystemExit(f"bench.py gather: no score files under {work}/scores")
-    text, bins, brier = tables(rows)
+    form = all(r.get("family") == "form" for r in rows)
+    if form:  # the model-form family has its own scores and its own generated section
+        text = form_tables(rows)
+        bins, brier = calibration(rows)
+    else:
+        text, bins, brier = tables(rows)
     walls = []
     for path in glob.glob(os.path.join(work, "wall-*.json")):
         with open(path) as f:
@@ -229,10 +299,11 @@ def gather(work, doc, svg_path):
     if doc:
         with open(doc) as f:
             page = f.read()
-        if BEGIN not in page or END not in page:
-            raise SystemExit(f"bench.py gather: {doc} has no '{BEGIN}' ... '{END}' section to replace")
-        head, rest = page.split(BEGIN, 1)
+        begin = BEGIN_FORM if form else BEGIN
+        if begin not in page or END not in page.split(begin, 1)[-1]:
+            raise SystemExit(f"bench.py gather: {doc} has no '{begin}' ... '{END}' section to replace")
+        head, rest = page.split(begin, 1)
         _, tail = rest.split(END, 1)
         with open(doc + ".tmp", "w") as f:
-            f.write(head + BEGIN + "\n" + text + END + tail)
+            f.write(head + begin + "\n" + text + END + tail)
         os.replace(doc + ".tmp", doc)
