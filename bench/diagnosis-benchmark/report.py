@@ -64,6 +64,18 @@ def calibration(rows):
     return bins, brier
 
 
+def calibration_table(bins, empty_bins):
+    """The calibration bins as a markdown table; `empty_bins`: a row of dashes for a bin no case fell in."""
+    lines = ["| probability bin | cases | mean probability | observed right | right |", "|---|---|---|---|---|"]
+    for b in bins:
+        if b["n"]:
+            lines.append(f"| {b['lo']:.2f}–{b['hi']:.2f} | {b['n']} | {b['mean_predicted']:.3f} | "
+                         f"{b['observed']:.3f} ± {b['sigma']:.3f} | {b['right']} |")
+        elif empty_bins:
+            lines.append(f"| {b['lo']:.2f}–{b['hi']:.2f} | 0 | – | – | – |")
+    return lines
+
+
 def svg(bins, brier, n):
     w, h, left, bottom, size = 460, 440, 70, 60, 340
     X = lambda p: left + p * size
@@ -155,14 +167,7 @@ def tables(rows):
         lines.append(f"| {fam} | " + " | ".join(cells) + " |")
     bins, brier = calibration(rows)
     lines.append("\nCalibration: rank 1's probability against how often rank 1 was right\n")
-    lines.append("| probability bin | cases | mean probability | observed right | right |")
-    lines.append("|---|---|---|---|---|")
-    for b in bins:
-        if b["n"]:
-            lines.append(f"| {b['lo']:.2f}–{b['hi']:.2f} | {b['n']} | {b['mean_predicted']:.3f} | "
-                         f"{b['observed']:.3f} ± {b['sigma']:.3f} | {b['right']} |")
-        else:
-            lines.append(f"| {b['lo']:.2f}–{b['hi']:.2f} | 0 | – | – | – |")
+    lines += calibration_table(bins, empty_bins=True)
     lines.append(f"\nBrier score of rank 1's probability: {brier:.3f} (0 = perfect; always saying 0.5 gives 0.25).\n")
     errors = [r for r in rows if "error" in r]
     wrong = [r for r in rows if not r["right"] and "error" not in r]
@@ -253,12 +258,7 @@ def form_tables(rows):
     lines += [f"| {n} | {x} | {y} | {g} |" for n, x, y, g in zip(names, a, b, goals)]
     bins, _ = calibration(low)
     lines.append("\nCalibration at 0.5–2 % noise: rank 1's probability against how often rank 1 was right\n")
-    lines.append("| probability bin | cases | mean probability | observed right | right |")
-    lines.append("|---|---|---|---|---|")
-    for c in bins:
-        if c["n"]:
-            lines.append(f"| {c['lo']:.2f}–{c['hi']:.2f} | {c['n']} | {c['mean_predicted']:.3f} | "
-                         f"{c['observed']:.3f} ± {c['sigma']:.3f} | {c['right']} |")
+    lines += calibration_table(bins, empty_bins=False)
     missed = [r for r in low if (r["effects_clear"] and not r["right"]) or r["invented"]
               or (r["form_exceeds_noise"] and not r["said_inadequate"])]
     lines.append(f"\nCases at 0.5–2 % noise that miss a goal ({len(missed)}):\n")
