@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <random>
 
 #include "ema/diagnose/diagnose.hpp"
@@ -100,6 +101,40 @@ TEST(PartsDiagnosis, OneMemberPartSoftenedRanksFirstWithItsFactor) {
   EXPECT_LT(d.model_solves, 200) << d.model_solves;
   // The updated model agrees with the test to ≥ 99 %.
   EXPECT_GE(first.mean_agreement_pct, 99.0);
+}
+
+// DiagnoseOptions::exact_margin: full solves only for sets that could compete. On this frame the
+// reduced models agree with the full solves to a few nats, so the sets hundreds of nats behind
+// keep their reduced misfit — fewer full solves, the leading readings unchanged to the digit, and
+// every set left unchecked given odds too small to show.
+TEST(PartsDiagnosis, SetsFarBehindSkipTheFullSolvesAndLeaveTheLeadersAlone) {
+  const model::Model nominal = formats::ReadModelFile(Frame().model);
+  const ModeSet test = Measure(
+      WithEffects({{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.3}}, {}, 0}}),
+      6, 1e-3, 1);
+  DiagnoseOptions every;
+  every.exact_margin = std::numeric_limits<double>::infinity();
+  const Diagnosis all_checked = Diagnose(nominal, {{"", test}}, every);
+  const Diagnosis margin = Diagnose(nominal, {{"", test}});
+  EXPECT_LT(margin.model_solves, all_checked.model_solves);
+  ASSERT_GE(margin.candidates.size(), 3u);
+  ASSERT_GE(all_checked.candidates.size(), 3u);
+  // Rank 1 is the same full-solve fit either way (its score to the digit); its probability moves
+  // only by what the sets left unchecked carried (≤ e^-9 each against it).
+  const Candidate& a = all_checked.candidates.front();
+  const Candidate& b = margin.candidates.front();
+  EXPECT_EQ(b.target, a.target);
+  EXPECT_FALSE(b.reduced_model);
+  EXPECT_NEAR(b.score, a.score, 1e-9 * std::abs(a.score));
+  EXPECT_NEAR(b.parameters[0].value, a.parameters[0].value, 1e-12);
+  EXPECT_NEAR(b.probability, a.probability, 1e-3);
+  int unchecked = 0;
+  for (const Candidate& c : margin.candidates)
+    if (c.reduced_model) {
+      ++unchecked;
+      EXPECT_LT(c.probability, 1e-4) << c.kind << " " << c.target;
+    }
+  EXPECT_GT(unchecked, 0);
 }
 
 TEST(PartsDiagnosis, OneGroupSoftenedRanksFirst) {

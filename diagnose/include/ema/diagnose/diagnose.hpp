@@ -138,6 +138,12 @@ struct DiagnoseOptions {
   /// solves. 0: always full solves.
   int reduced_model_min_dofs = 200;
   int exact_candidates = 8;
+  /// FE-sized models: of those (and their subsets), a set whose reduced-model score, less the most
+  /// by which a reduced score has overstated a full one in the checks so far, is more than this many
+  /// nats (ln odds: e^-15 ≈ 3·10⁻⁷) behind the best full score keeps its reduced-model misfit
+  /// (`reduced_model`); the swaps below start only from sets within it of the best. Infinity: every
+  /// one of the `exact_candidates` and their subsets is checked, whatever its score.
+  double exact_margin = 15.0;
   /// FE-sized models: after that, the best fit of each size ≥ 2 has each effect swapped for each
   /// look-alike of the same kind (screened for its own value), and the `polish_swaps` best of those
   /// starts by full solves are re-fitted around them (docs/diagnose.md "FE-sized models"). 0: off.
