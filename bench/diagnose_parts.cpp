@@ -51,19 +51,36 @@ ModeSet VerticalModes(const model::Model& truth, int count, double noise, unsign
   return out;
 }
 
-void RunFrame(benchmark::State& state, int segments, int zones, bool model_error = true, int polish_swaps = 3,
-              double exact_margin = 15.0) {
+// The frame of `segments` elements per girder and `zones` girder zones, written to a scratch folder
+// (`tag` keeps the benchmarks' folders apart; the caller removes it) and read back.
+struct WrittenFrame {
+  fs::path dir;
+  testing::FrameFiles files;
+  model::Model nominal;
+};
+WrittenFrame WriteAndReadFrame(int segments, int zones, const std::string& tag) {
   testing::FrameSpec spec;
   spec.segments = segments;
   spec.zones = zones;
-  const fs::path dir = fs::temp_directory_path() / ("ema-bench-frame-" + std::to_string(segments));
-  const testing::FrameFiles files = testing::WriteFrame(dir, spec);
-  const model::Model nominal = formats::ReadModelFile(files.model);
-  const model::Model truth = model::ApplyEffect(nominal, {model::EffectKind::kStiffnessScale,
-                                                          EffectTarget::MemberOf("girders", "G3"),
-                                                          {{"factor", 0.4}},
-                                                          std::nullopt,
-                                                          0});
+  WrittenFrame out;
+  out.dir = fs::temp_directory_path() / ("ema-bench-frame-" + tag + std::to_string(segments));
+  out.files = testing::WriteFrame(out.dir, spec);
+  out.nominal = formats::ReadModelFile(out.files.model);
+  return out;
+}
+
+// The truth of the frame benchmarks: girder zone G3 at 0.4 of its stiffness.
+model::Effect SoftenedG3() {
+  return {model::EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.4}}, std::nullopt, 0};
+}
+
+void RunFrame(benchmark::State& state, int segments, int zones, bool model_error = true, int polish_swaps = 3,
+              double exact_margin = diagnose::DiagnoseOptions{}.exact_margin) {
+  const WrittenFrame frame = WriteAndReadFrame(segments, zones, "");
+  const fs::path& dir = frame.dir;
+  const testing::FrameFiles& files = frame.files;
+  const model::Model& nominal = frame.nominal;
+  const model::Model truth = model::ApplyEffect(nominal, SoftenedG3());
   const ModeSet test = VerticalModes(truth, 6, 1e-3, 7);
   diagnose::Diagnosis d;
   diagnose::DiagnoseOptions options;
@@ -168,21 +185,16 @@ BENCHMARK(BM_DiagnoseFrame50000Dofs50Parts)->Unit(benchmark::kMillisecond)->Iter
 // One full solve of the frame (its lowest modes by shift-invert, as the diagnosis's checks and
 // the centres of its reduced models make them): where the large cases' time goes (#39).
 void RunFrameSolve(benchmark::State& state, int segments) {
-  testing::FrameSpec spec;
-  spec.segments = segments;
-  spec.zones = 30;
-  const fs::path dir = fs::temp_directory_path() / ("ema-bench-frame-solve-" + std::to_string(segments));
-  const testing::FrameFiles files = testing::WriteFrame(dir, spec);
-  const model::Model nominal = formats::ReadModelFile(files.model);
+  const WrittenFrame frame = WriteAndReadFrame(segments, 30, "solve-");
   model::SolveOptions so;
   so.max_modes = 30;
   model::Solution s;
-  for (auto _ : state) s = model::Solve(nominal, so);
-  state.counters["dofs"] = files.dofs;
+  for (auto _ : state) s = model::Solve(frame.nominal, so);
+  state.counters["dofs"] = frame.files.dofs;
   state.counters["modes"] = static_cast<double>(s.modes.modes.size());
   state.counters["f1_hz"] = s.modes.modes.empty() ? 0.0 : s.modes.modes[0].frequency_hz;
   state.counters["f30_hz"] = s.modes.modes.empty() ? 0.0 : s.modes.modes.back().frequency_hz;
-  fs::remove_all(dir);
+  fs::remove_all(frame.dir);
 }
 void BM_FullSolveFrame12000Dofs(benchmark::State& state) { RunFrameSolve(state, 1000); }
 BENCHMARK(BM_FullSolveFrame12000Dofs)->Unit(benchmark::kMillisecond)->Iterations(3);
@@ -194,15 +206,9 @@ BENCHMARK(BM_FullSolveFrame50000Dofs)->Unit(benchmark::kMillisecond)->Iterations
 // 50 000-DOF frame it was off by half (a "new" 4.58 Hz mode) while the solver's rigid-body limit
 // dropped the frame's four lowest modes; within 0.5 % since (#39, docs/diagnose.md).
 void RunReducedAtTruth(benchmark::State& state, int segments) {
-  testing::FrameSpec spec;
-  spec.segments = segments;
-  spec.zones = 30;
-  const fs::path dir = fs::temp_directory_path() / ("ema-bench-frame-reduced-" + std::to_string(segments));
-  const testing::FrameFiles files = testing::WriteFrame(dir, spec);
-  const model::Model nominal = formats::ReadModelFile(files.model);
-  const model::Effect zone{model::EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.4}},
-                           std::nullopt, 0};
-  const model::Model truth = model::ApplyEffect(nominal, zone);
+  const WrittenFrame frame = WriteAndReadFrame(segments, 30, "reduced-");
+  const model::Effect zone = SoftenedG3();
+  const model::Model truth = model::ApplyEffect(frame.nominal, zone);
   // As the diagnosis makes them for six test modes (diagnose/src/evaluate.cpp).
   model::SolveOptions so;
   so.max_modes = 20;
@@ -213,7 +219,7 @@ void RunReducedAtTruth(benchmark::State& state, int segments) {
   model::Solution reduced, full;
   int basis = 0;
   for (auto _ : state) {
-    const model::ReducedModelFactory factory(nominal, so, ro);
+    const model::ReducedModelFactory factory(frame.nominal, so, ro);
     const auto reduced_model = factory.Make({{zone}});
     reduced = reduced_model->Solve(truth, so, false);
     basis = reduced_model->BasisSize();
@@ -222,12 +228,12 @@ void RunReducedAtTruth(benchmark::State& state, int segments) {
   double worst = 0.0;
   for (size_t i = 0; i < 6 && i < reduced.modes.modes.size() && i < full.modes.modes.size(); ++i)
     worst = std::max(worst, std::abs(reduced.modes.modes[i].frequency_hz / full.modes.modes[i].frequency_hz - 1.0));
-  state.counters["dofs"] = files.dofs;
+  state.counters["dofs"] = frame.files.dofs;
   state.counters["full_f1_hz"] = full.modes.modes.empty() ? 0.0 : full.modes.modes[0].frequency_hz;
   state.counters["reduced_f1_hz"] = reduced.modes.modes.empty() ? 0.0 : reduced.modes.modes[0].frequency_hz;
   state.counters["worst_rel_error_6"] = worst;
   state.counters["basis"] = basis;
-  fs::remove_all(dir);
+  fs::remove_all(frame.dir);
 }
 void BM_ReducedAtTruthFrame12000Dofs(benchmark::State& state) { RunReducedAtTruth(state, 1000); }
 BENCHMARK(BM_ReducedAtTruthFrame12000Dofs)->Unit(benchmark::kMillisecond)->Iterations(1);

@@ -288,8 +288,8 @@ void Polish(detail::Problem* p, std::vector<detail::Fit>* fits, const DiagnoseOp
   // most by which a reduced score has overstated a full one so far, is still more than
   // `exact_margin` nats behind the best full score keeps its reduced-model misfit. Where the reduced
   // models are good (the 12 000-DOF frame: within 3 nats) that spares the sets hundreds of nats
-  // behind; where they are poor (a 50 000-DOF frame whose softened zone makes a new lowest mode
-  // the nominal basis cannot hold: off by 10⁵ nats) the first check shows it and all are checked.
+  // behind; where they are poor the first check shows it (the allowance grows by as much) and the
+  // sets behind are checked as before.
   double best_full = detail::kInf, overstated = 0.0;
   for (size_t i : order) {
     detail::Fit& f = (*fits)[i];

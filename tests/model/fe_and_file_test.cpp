@@ -18,10 +18,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Clamped Euler-Bernoulli cantilever of `elements` cubic Hermite elements (uz, ry per node),
-/// written as M.mtx, K.mtx, dofs.csv, nodes.csv and a model file; returns the model path.
+/// Clamped Euler-Bernoulli cantilever of `elements` cubic Hermite elements (uz, ry per node), or
+/// with `free` the same beam free-free (node 0 kept), written as M.mtx, K.mtx, dofs.csv, nodes.csv
+/// and a model file; returns the model path.
 fs::path WriteCantilever(const fs::path& dir, int elements, double length, double ei, double rho_a, bool free = false) {
-  const int nodes = elements + 1, first = free ? 0 : 1, n = 2 * (nodes - first);  // node 0 clamped: its DOFs removed
+  const int nodes = elements + 1, first = free ? 0 : 1, n = 2 * (nodes - first);  // clamped: node 0's DOFs removed
   const double l = length / elements;
   Eigen::Matrix4d ke, me;
   ke << 12, 6 * l, -12, 6 * l, 6 * l, 4 * l * l, -6 * l, 2 * l * l, -12, -6 * l, 12, -6 * l, 6 * l, 2 * l * l, -6 * l,
@@ -34,7 +35,7 @@ fs::path WriteCantilever(const fs::path& dir, int elements, double length, doubl
   for (int e = 0; e < elements; ++e)
     for (int i = 0; i < 4; ++i)
       for (int j = 0; j < 4; ++j) {
-        const int gi = 2 * (e - first) + i, gj = 2 * (e - first) + j;  // global index minus the clamped node
+        const int gi = 2 * (e - first) + i, gj = 2 * (e - first) + j;  // global index (< 0: the clamped node)
         if (gi < 0 || gj < 0) continue;
         kt.emplace_back(gi, gj, ke(i, j));
         mt.emplace_back(gi, gj, me(i, j));
