@@ -112,7 +112,7 @@ ReducedModelFactory::ReducedModelFactory(const Model& input, const SolveOptions&
   // The same shift and rigid-body limit as the sparse solver (solve.cpp): K − σM is definite with
   // rigid-body modes and massless DOFs alike.
   const double scale = system_.stiffness.diagonal().sum() / system_.mass.diagonal().sum();
-  const double sigma = -std::max(1.0, 1e-8 * scale);
+  const double sigma = -std::max(1.0, options_.sparse_shift * scale);
   rigid_limit_ = std::max(std::pow(kTwoPi * options_.rigid_frequency_hz, 2), options_.rigid_tolerance * scale);
   factorisation_ = std::make_unique<Factorisation>();
   const Eigen::SparseMatrix<double> shifted = system_.stiffness - sigma * system_.mass;

@@ -508,9 +508,10 @@ Solution Solve(const Model& input, const SolveOptions& options) {
       extra.setFromTriplets(diag.begin(), diag.end());
       mass += extra;
     }
-    // Shift slightly below zero so K - sigma M is definite even with rigid-body modes.
+    // Shift slightly below zero so K - sigma M is definite even with rigid-body modes, and no
+    // further: the lowest modes converge by how far apart they lie after the shift-inversion.
     const double scale = sys.stiffness.diagonal().sum() / mass.diagonal().sum();
-    const double sigma = -std::max(1.0, 1e-8 * scale);
+    const double sigma = -std::max(1.0, options.sparse_shift * scale);
     LdltShiftInvert op(sys.stiffness, mass);
     Spectra::SparseSymMatProd<double> bop(mass);
     Spectra::SymGEigsShiftSolver<LdltShiftInvert, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert>
@@ -522,6 +523,7 @@ Solution Solve(const Model& input, const SolveOptions& options) {
     eigenvalues = solver.eigenvalues();
     vectors = solver.eigenvectors();
     sparse_scale = scale;
+    sol.shift_invert_solves = static_cast<int>(solver.num_operations());
   }
   const double lambda_max = eigenvalues.cwiseAbs().maxCoeff();
   // The sparse path only sees the lowest eigenvalues: its relative limit is to trace(K)/trace(M),
