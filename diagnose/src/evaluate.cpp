@@ -100,10 +100,11 @@ struct Evaluator::Reduced {
   model::Model skeleton;  // the base without its [fe] matrices, DOF map and node positions: effects are applied to copies of it
   std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModelFactory>> factories;
   std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModel>> models;
-  /// Reduced models in order of last use: at most kKept stay (each holds n × b doubles; a diagnosis
-  /// visits hundreds of sets, mostly in turn).
+  /// Reduced models in order of last use: at most kKept stay (each holds a few b × b matrices, b a
+  /// few dozen — the n-sized probe blocks live once in the factory; a diagnosis visits hundreds
+  /// of sets, and makes a set's model again once it was dropped).
   std::deque<std::pair<std::size_t, std::string>> recent;
-  static constexpr std::size_t kKept = 24;
+  static constexpr std::size_t kKept = 512;
 };
 
 Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options,

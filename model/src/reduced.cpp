@@ -35,12 +35,6 @@ Eigen::SparseMatrix<double> Embedded(const Eigen::SparseMatrix<double>& part, in
   return out;
 }
 
-// out += Vᵀ D V for a D with few entries (a spring, a point mass, sensors): a rank-one update per
-// entry, column by column.
-void AddProjected(const std::vector<Eigen::Triplet<double>>& d, const Eigen::MatrixXd& v, Eigen::MatrixXd* out) {
-  for (const auto& e : d) out->noalias() += e.value() * v.row(e.row()).transpose() * v.row(e.col());
-}
-
 // Triplets summed per entry (duplicates in their order, as setFromTriplets sums them), column by
 // column, rows ascending.
 std::vector<Eigen::Triplet<double>> Summed(std::vector<Eigen::Triplet<double>> t) {
@@ -75,13 +69,12 @@ std::vector<Eigen::Triplet<double>> Difference(const std::vector<Eigen::Triplet<
   return out;
 }
 
-// Vᵀ A V for a part matrix A (FE-sized, its entries on `rows` of the system only): the part's
-// rows of V, not all of them — a joint zone touches a few dozen of the model's DOFs.
-Eigen::MatrixXd ProjectPart(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& v, int offset,
+// Vᵀ A V for a part matrix A (FE-sized, its entries on `rows` of the system only), given those
+// rows of V: a joint zone touches a few dozen of the model's DOFs.
+Eigen::MatrixXd ProjectPart(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& vr, int offset,
                             const std::vector<int>& rows) {
   std::vector<int> local(static_cast<size_t>(a.rows()), -1);
   for (size_t k = 0; k < rows.size(); ++k) local[static_cast<size_t>(rows[k] - offset)] = static_cast<int>(k);
-  const Eigen::MatrixXd vr = v(rows, Eigen::all);
   Eigen::MatrixXd av = Eigen::MatrixXd::Zero(vr.rows(), vr.cols());
   for (int c = 0; c < a.outerSize(); ++c)
     for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it)
@@ -119,6 +112,7 @@ ReducedModelFactory::ReducedModelFactory(const Model& input, const SolveOptions&
   if (!factorisation_->ldlt.Compute(shifted))
     throw InputError(origin, "factorisation of K - sigma M failed (the reduced model of the diagnosis needs it)");
   mass_modes_ = system_.mass * solution_.full_shapes;
+  observed_modes_ = system_.observation * solution_.full_shapes;
   rest_assembler_ = std::make_unique<detail::RestAssembler>(base);
   {
     std::vector<Eigen::Triplet<double>> mt, kt;
@@ -164,11 +158,41 @@ ReducedModelFactory::RestDelta ReducedModelFactory::RestDeltaOf(const Model& cha
   return {Difference(Summed(std::move(kt)), rest_stiffness_), Difference(Summed(std::move(mt)), rest_mass_)};
 }
 
-const Eigen::MatrixXd& ReducedModelFactory::Responses(const std::vector<Effect>& probe) const {
+std::string ReducedModelFactory::KeyOf(const std::vector<Effect>& probe) {
   std::string key;
   for (const Effect& e : probe) key += Describe(e) + ";";
-  auto it = responses_.find(key);
-  if (it != responses_.end()) return it->second;
+  return key;
+}
+
+const ReducedModelFactory::ProbeBlock& ReducedModelFactory::Block(const std::vector<Effect>& probe) const {
+  const std::string key = KeyOf(probe);
+  auto it = blocks_.find(key);
+  if (it != blocks_.end()) return it->second;
+  const Eigen::MatrixXd w = Responses(probe);
+  ProbeBlock block;
+  block.responses = w;
+  // M-orthogonal to Φ (twice, for round-off): the reduced models' k0 then has Λ on Φ's block and
+  // no coupling to the responses.
+  for (int pass = 0; pass < 2 && w.cols() > 0; ++pass)
+    block.responses -= solution_.full_shapes * (mass_modes_.transpose() * block.responses);
+  block.observed = system_.observation * block.responses;
+  block.mass_gram = block.responses.transpose() * (system_.mass * block.responses);
+  block.stiffness_gram = block.responses.transpose() * (system_.stiffness * block.responses);
+  return blocks_.emplace(key, std::move(block)).first->second;
+}
+
+const ReducedModelFactory::CrossGram& ReducedModelFactory::Cross(const std::string& first, const ProbeBlock& a,
+                                                                 const std::string& second,
+                                                                 const ProbeBlock& b) const {
+  auto it = cross_.find({first, second});
+  if (it != cross_.end()) return it->second;
+  CrossGram g;
+  g.mass = a.responses.transpose() * (system_.mass * b.responses);
+  g.stiffness = a.responses.transpose() * (system_.stiffness * b.responses);
+  return cross_.emplace(std::make_pair(first, second), std::move(g)).first->second;
+}
+
+Eigen::MatrixXd ReducedModelFactory::Responses(const std::vector<Effect>& probe) const {
   Model changed = skeleton_;
   for (const Effect& e : probe) changed = ApplyEffect(changed, e);
   const Delta d = DeltaOf(changed, options_);
@@ -198,7 +222,7 @@ const Eigen::MatrixXd& ReducedModelFactory::Responses(const std::vector<Effect>&
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(w);
     qr.setThreshold(1e-10);
     Eigen::MatrixXd basis = qr.householderQ() * Eigen::MatrixXd::Identity(w.rows(), qr.rank());
-    return responses_.emplace(key, std::move(basis)).first->second;
+    return basis;
   }
   const Eigen::MatrixXd& phi = solution_.full_shapes;
   Eigen::MatrixXd rhs = d.stiffness * phi.leftCols(q);
@@ -216,28 +240,48 @@ const Eigen::MatrixXd& ReducedModelFactory::Responses(const std::vector<Effect>&
   qr.setThreshold(1e-8);
   const Eigen::Index rank = qr.rank();
   Eigen::MatrixXd basis = qr.householderQ() * Eigen::MatrixXd::Identity(w.rows(), rank);
-  return responses_.emplace(key, std::move(basis)).first->second;
+  return basis;
 }
 
 std::unique_ptr<ReducedModel> ReducedModelFactory::Make(const std::vector<std::vector<Effect>>& probes) const {
   std::unique_ptr<ReducedModel> r(new ReducedModel(this));
-  const Eigen::MatrixXd& phi = solution_.full_shapes;
-  const Eigen::SparseMatrix<double>& mass = system_.mass;
-  const int n = DofCount();
-  const auto m = phi.cols();
-  // The responses of every probe, M-orthogonalised against the base's modes (twice, for
-  // round-off), then M-orthonormalised among themselves through the eigen-decomposition of their
-  // M-Gram matrix (directions below drop_tolerance of the largest dropped).
+  const auto m = solution_.full_shapes.cols();
+  // The probes' blocks (M-orthogonal to Φ), M-orthonormalised among themselves through the
+  // eigen-decomposition of their M-Gram matrix (directions below drop_tolerance of the largest
+  // dropped) — the Gram matrices assembled from the blocks' own and pairwise ones, kept in the
+  // factory: a reduced model costs a few dozen squared, not n times that.
+  std::vector<std::string> keys;
+  std::vector<Eigen::Index> start;
   Eigen::Index total = 0;
-  std::vector<const Eigen::MatrixXd*> blocks;
-  for (const auto& probe : probes) blocks.push_back(&Responses(probe)), total += blocks.back()->cols();
-  Eigen::MatrixXd w(n, total);
-  for (Eigen::Index c = 0; const auto* b : blocks) w.middleCols(c, b->cols()) = *b, c += b->cols();
-  for (int pass = 0; pass < 2 && total > 0; ++pass) w -= phi * (mass_modes_.transpose() * w);
-  Eigen::MatrixXd kept_w;
+  for (const auto& probe : probes) {
+    const ProbeBlock& block = Block(probe);
+    if (block.responses.cols() == 0) continue;
+    keys.push_back(KeyOf(probe));
+    r->blocks_.push_back(&block);
+    start.push_back(total);
+    total += block.responses.cols();
+  }
+  Eigen::MatrixXd gram(total, total), stiffness(total, total);
+  for (size_t i = 0; i < r->blocks_.size(); ++i) {
+    const ProbeBlock& a = *r->blocks_[i];
+    const Eigen::Index ta = a.responses.cols();
+    gram.block(start[i], start[i], ta, ta) = a.mass_gram;
+    stiffness.block(start[i], start[i], ta, ta) = a.stiffness_gram;
+    for (size_t j = i + 1; j < r->blocks_.size(); ++j) {
+      const ProbeBlock& c = *r->blocks_[j];
+      const Eigen::Index tc = c.responses.cols();
+      // Kept for the pair in one order (the keys sorted): {A, B} and {B, A} share it.
+      const bool swapped = keys[j] < keys[i];
+      const CrossGram& g = swapped ? Cross(keys[j], c, keys[i], a) : Cross(keys[i], a, keys[j], c);
+      const Eigen::MatrixXd mass = swapped ? Eigen::MatrixXd(g.mass.transpose()) : g.mass;
+      const Eigen::MatrixXd stiff = swapped ? Eigen::MatrixXd(g.stiffness.transpose()) : g.stiffness;
+      gram.block(start[i], start[j], ta, tc) = mass;
+      gram.block(start[j], start[i], tc, ta) = mass.transpose();
+      stiffness.block(start[i], start[j], ta, tc) = stiff;
+      stiffness.block(start[j], start[i], tc, ta) = stiff.transpose();
+    }
+  }
   if (total > 0) {
-    const Eigen::MatrixXd mw = mass * w;
-    Eigen::MatrixXd gram = w.transpose() * mw;
     gram = 0.5 * (gram + gram.transpose()).eval();
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(gram);
     const double largest = std::max(0.0, es.eigenvalues().maxCoeff());
@@ -245,24 +289,28 @@ std::unique_ptr<ReducedModel> ReducedModelFactory::Make(const std::vector<std::v
     for (Eigen::Index k = 0; k < es.eigenvalues().size(); ++k)
       if (es.eigenvalues()(k) > reduced_options_.drop_tolerance * reduced_options_.drop_tolerance * largest)
         keep.push_back(k);
-    kept_w.resize(n, static_cast<Eigen::Index>(keep.size()));
+    r->coefficients_.resize(total, static_cast<Eigen::Index>(keep.size()));
     for (size_t k = 0; k < keep.size(); ++k)
-      kept_w.col(static_cast<Eigen::Index>(k)) =
-          w * es.eigenvectors().col(keep[k]) / std::sqrt(es.eigenvalues()(keep[k]));
+      r->coefficients_.col(static_cast<Eigen::Index>(k)) =
+          es.eigenvectors().col(keep[k]) / std::sqrt(es.eigenvalues()(keep[k]));
   }
-  const Eigen::Index b = m + kept_w.cols();
-  r->basis_.resize(n, b);
-  r->basis_.leftCols(m) = phi;
-  r->basis_.rightCols(kept_w.cols()) = kept_w;
+  const Eigen::Index kept = r->coefficients_.cols();
+  const Eigen::Index b = m + kept;
   // VᵀKV: Φ's block is Λ and its coupling to the responses vanishes (KΦ = MΦΛ and the responses
-  // are M-orthogonal to Φ); only the responses' own block is projected. VᵀMV = I.
+  // are M-orthogonal to Φ); the responses' own block is Cᵀ (WᵀKW) C. VᵀMV = I.
   r->k0_ = Eigen::MatrixXd::Zero(b, b);
   r->k0_.topLeftCorner(m, m).diagonal() = lambda_;
-  if (kept_w.cols() > 0) {
-    Eigen::MatrixXd kww = kept_w.transpose() * (system_.stiffness * kept_w);
-    r->k0_.bottomRightCorner(kept_w.cols(), kept_w.cols()) = 0.5 * (kww + kww.transpose());
+  if (kept > 0) {
+    const Eigen::MatrixXd kww = r->coefficients_.transpose() * stiffness * r->coefficients_;
+    r->k0_.bottomRightCorner(kept, kept) = 0.5 * (kww + kww.transpose());
   }
   r->m0_ = Eigen::MatrixXd::Identity(b, b);
+  r->observed_basis_.resize(observed_modes_.rows(), b);
+  r->observed_basis_.leftCols(m) = observed_modes_;
+  r->observed_basis_.rightCols(kept).setZero();
+  for (size_t k = 0; k < r->blocks_.size(); ++k)
+    r->observed_basis_.rightCols(kept).noalias() +=
+        r->blocks_[k]->observed * r->coefficients_.middleRows(start[k], r->blocks_[k]->responses.cols());
   r->part_k_.resize(skeleton_.fe.parts.size());
   r->part_m_.resize(skeleton_.fe.parts.size());
   r->projected_.assign(skeleton_.fe.parts.size(), 0);
@@ -271,7 +319,6 @@ std::unique_ptr<ReducedModel> ReducedModelFactory::Make(const std::vector<std::v
     for (const Effect& e : probe) changed = ApplyEffect(changed, e);
     r->ProjectParts(changed);
   }
-  r->observed_basis_ = system_.observation * r->basis_;
   return r;
 }
 
@@ -290,6 +337,32 @@ const std::vector<int>& ReducedModelFactory::PartRows(std::size_t p) const {
   return rows;
 }
 
+Eigen::MatrixXd ReducedModel::BasisRows(const std::vector<int>& rows) const {
+  const ReducedModelFactory& f = *factory_;
+  const auto m = f.solution_.full_shapes.cols();
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), m + coefficients_.cols());
+  out.leftCols(m) = f.solution_.full_shapes(rows, Eigen::all);
+  out.rightCols(coefficients_.cols()).setZero();
+  for (Eigen::Index k = 0, start = 0; k < static_cast<Eigen::Index>(blocks_.size()); ++k) {
+    const Eigen::MatrixXd& w = blocks_[static_cast<size_t>(k)]->responses;
+    out.rightCols(coefficients_.cols()).noalias() += w(rows, Eigen::all) * coefficients_.middleRows(start, w.cols());
+    start += w.cols();
+  }
+  return out;
+}
+
+void ReducedModel::AddProjected(const std::vector<Eigen::Triplet<double>>& d, Eigen::MatrixXd* out) const {
+  if (d.empty()) return;
+  std::vector<int> rows;
+  for (const auto& e : d) rows.push_back(e.row()), rows.push_back(e.col());
+  std::sort(rows.begin(), rows.end());
+  rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+  const Eigen::MatrixXd v = BasisRows(rows);
+  auto at = [&](int dof) { return std::lower_bound(rows.begin(), rows.end(), dof) - rows.begin(); };
+  // A rank-one update per entry.
+  for (const auto& e : d) out->noalias() += e.value() * v.row(at(e.row())).transpose() * v.row(at(e.col()));
+}
+
 void ReducedModel::ProjectParts(const Model& changed) const {
   const ReducedModelFactory& f = *factory_;
   const int offset = f.system_.body_dof_count;
@@ -298,8 +371,9 @@ void ReducedModel::ProjectParts(const Model& changed) const {
     const FePart& was = f.skeleton_.fe.parts[p];
     if (projected_[p] || (now.stiffness_factor == was.stiffness_factor && now.mass_factor == was.mass_factor)) continue;
     const std::vector<int>& rows = f.PartRows(p);
-    if (now.stiffness) part_k_[p] = ProjectPart(*now.stiffness, basis_, offset, rows);
-    if (now.mass) part_m_[p] = ProjectPart(*now.mass, basis_, offset, rows);
+    const Eigen::MatrixXd vr = BasisRows(rows);
+    if (now.stiffness) part_k_[p] = ProjectPart(*now.stiffness, vr, offset, rows);
+    if (now.mass) part_m_[p] = ProjectPart(*now.mass, vr, offset, rows);
     projected_[p] = 1;
   }
 }
@@ -313,8 +387,8 @@ Solution ReducedModel::Solve(const Model& changed, const SolveOptions& options, 
   // to the base, projected entry by entry.
   if (rest_changed || !options.extra_masses.empty()) {
     const ReducedModelFactory::RestDelta rest = f.RestDeltaOf(changed, options);
-    AddProjected(rest.stiffness, basis_, &k);
-    AddProjected(rest.mass, basis_, &m);
+    AddProjected(rest.stiffness, &k);
+    AddProjected(rest.mass, &m);
     mass_changed = !rest.mass.empty();
   }
   ProjectParts(changed);

@@ -154,6 +154,48 @@ TEST_F(FrameParts, ReducedModelMatchesFullSolves) {
   for (size_t i = 0; i < full.size(); ++i) EXPECT_NEAR(approx[i], full[i], 1e-4 * full[i]) << "mode " << i + 1;
 }
 
+// A reduced model of several probes is assembled from blocks the factory keeps per probe and per
+// pair (issue 39: no n-sized product per model): the probes in either order give the same
+// eigenvalues to round-off (the pair's cross Gram matrices kept once, transposed for the other
+// order), a set met again reuses its blocks (its second model the same as its first, bit for bit),
+// and the eigenvalues are upper bounds of a full solve's of the two changes together.
+TEST_F(FrameParts, ReducedModelOfTwoProbesIsTheSameInEitherOrder) {
+  const Model m = formats::ReadModelFile(files_->model);
+  SolveOptions so;
+  so.max_modes = 10;
+  ReducedModelOptions ro;
+  ro.modes = 20;
+  ro.enriched_modes = 10;
+  const ReducedModelFactory factory(m, so, ro);
+  const Effect girder{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.5}}, {}, 0};
+  const Effect cross{EffectKind::kStiffnessScale, EffectTarget::MemberOf("cross", "X2"), {{"factor", 0.5}}, {}, 0};
+  const auto forward = factory.Make({{girder}, {cross}});
+  const auto backward = factory.Make({{cross}, {girder}});
+  const auto again = factory.Make({{girder}, {cross}});
+  EXPECT_EQ(forward->BasisSize(), backward->BasisSize());
+  const Effect g{EffectKind::kStiffnessScale, EffectTarget::MemberOf("girders", "G3"), {{"factor", 0.6}}, {}, 0};
+  const Effect x{EffectKind::kStiffnessScale, EffectTarget::MemberOf("cross", "X2"), {{"factor", 0.4}}, {}, 0};
+  const Model changed = ApplyEffect(ApplyEffect(factory.Skeleton(), g), x);
+  const std::vector<double> full = Frequencies(Solve(ApplyEffect(ApplyEffect(m, g), x), so));
+  const std::vector<double> f = Frequencies(forward->Solve(changed, so));
+  const std::vector<double> b = Frequencies(backward->Solve(changed, so));
+  const std::vector<double> a = Frequencies(again->Solve(changed, so));
+  ASSERT_EQ(f.size(), full.size());
+  ASSERT_EQ(b.size(), full.size());
+  for (size_t i = 0; i < full.size(); ++i) {
+    // Same span, another order of the same products: round-off of the probes' Gram matrices,
+    // condition numbers up to 1e17 (measured 6e-7 at most; the basis of the concatenated responses
+    // orthogonalised at once, before blocks were kept, differed between the orders by 2.5e-7).
+    EXPECT_NEAR(b[i], f[i], 1e-6 * f[i]) << "mode " << i + 1;
+    EXPECT_EQ(a[i], f[i]) << "mode " << i + 1;
+    // Two changes at once, the cross beam's 60 % beyond its probe's 50 %: Rayleigh-Ritz upper
+    // bounds, within 0.3 % (modes 2 and 6, where the cross beam twists the girders: measured
+    // 3.5314 against 3.5208 Hz, the same as the concatenated basis gave).
+    EXPECT_NEAR(f[i], full[i], 5e-3 * full[i]) << "mode " << i + 1;
+    EXPECT_GE(f[i], full[i] * (1.0 - 1e-6)) << "Rayleigh-Ritz gives upper bounds";
+  }
+}
+
 // A reduced solve projects point masses, springs and sensors from their own entries with the base's
 // DOF layout (issue 39): the changed model it is given may leave out its [fe] DOF map and node
 // positions — the diagnosis copies a skeleton without them for every evaluation — and solves the

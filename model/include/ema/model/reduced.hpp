@@ -91,7 +91,27 @@ class ReducedModelFactory {
     std::vector<Eigen::Triplet<double>> stiffness, mass;
   };
   RestDelta RestDeltaOf(const Model& changed, const SolveOptions& options) const;
-  const Eigen::MatrixXd& Responses(const std::vector<Effect>& probe) const;
+  /// A probe's static responses as a basis block: M-orthogonal to the base's modes Φ (twice, for
+  /// round-off), with what every reduced model holding it needs from them, computed once per probe
+  /// and kept — a reduced model stores only coefficients on the blocks, never an n × b basis (the
+  /// diagnosis makes hundreds of reduced models of one or two probes each; forming, orthogonalising
+  /// and projecting an n × b basis for each was most of its time on 50 000 DOFs).
+  struct ProbeBlock {
+    Eigen::MatrixXd responses;           ///< n × t
+    Eigen::MatrixXd observed;            ///< observation × responses
+    Eigen::MatrixXd mass_gram;           ///< responsesᵀ M responses
+    Eigen::MatrixXd stiffness_gram;      ///< responsesᵀ K responses
+  };
+  const ProbeBlock& Block(const std::vector<Effect>& probe) const;
+  /// The static responses to a probe as an orthonormal basis of their span (not kept: Block is).
+  Eigen::MatrixXd Responses(const std::vector<Effect>& probe) const;
+  /// wᵀ M v and wᵀ K v of two probes' blocks (kept per pair).
+  struct CrossGram {
+    Eigen::MatrixXd mass, stiffness;
+  };
+  const CrossGram& Cross(const std::string& first, const ProbeBlock& a, const std::string& second,
+                         const ProbeBlock& b) const;
+  static std::string KeyOf(const std::vector<Effect>& probe);
 
   struct Factorisation;
   /// The rows (in system DOFs) on which part p has entries, for projecting it on those rows only.
@@ -109,7 +129,9 @@ class ReducedModelFactory {
   mutable std::vector<std::vector<int>> part_rows_;  ///< per part, its non-zero rows (filled on use)
   double rigid_limit_ = 0.0;
   std::unique_ptr<Factorisation> factorisation_;
-  mutable std::map<std::string, Eigen::MatrixXd> responses_;  ///< per probe, n × enriched_modes
+  Eigen::MatrixXd observed_modes_;     ///< observation × Φ
+  mutable std::map<std::string, ProbeBlock> blocks_;                          ///< per probe
+  mutable std::map<std::pair<std::string, std::string>, CrossGram> cross_;   ///< per pair of probes
 };
 
 class ReducedModel {
@@ -124,15 +146,23 @@ class ReducedModel {
   /// neither), so a skeleton without them will do.
   Solution Solve(const Model& changed, const SolveOptions& options, bool rest_changed = true) const;
 
-  int BasisSize() const { return static_cast<int>(basis_.cols()); }
+  int BasisSize() const { return static_cast<int>(k0_.cols()); }
 
  private:
   friend class ReducedModelFactory;
   explicit ReducedModel(const ReducedModelFactory* factory) : factory_(factory) {}
 
   const ReducedModelFactory* factory_;
-  Eigen::MatrixXd basis_;              ///< n × b, M-orthonormal
+  /// The basis V = [Φ, [w_1 … w_P] C], M-orthonormal, held as the factory's probe blocks w_p and
+  /// the coefficients C (Σ t_p × kept): its rows are formed where they are needed (a part's rows,
+  /// a spring's, the test points'), never all n of them.
+  std::vector<const ReducedModelFactory::ProbeBlock*> blocks_;
+  Eigen::MatrixXd coefficients_;
   Eigen::MatrixXd observed_basis_;     ///< observation × basis
+  /// Rows `rows` (system DOFs) of V.
+  Eigen::MatrixXd BasisRows(const std::vector<int>& rows) const;
+  /// out += Vᵀ D V for a D with few entries (a spring, a point mass, sensors).
+  void AddProjected(const std::vector<Eigen::Triplet<double>>& d, Eigen::MatrixXd* out) const;
   Eigen::MatrixXd k0_, m0_;            ///< VᵀKV, VᵀMV of the base
   /// VᵀK_pV, VᵀM_pV per part, projected when a solve first changes that part's factor (the probes'
   /// parts at Make): most reduced models change two or three of hundreds of parts.
