@@ -26,6 +26,7 @@ bool DiagnoseOptions::IsValid(std::string* error) const {
   else if (beam < 1 || additions < 1) why = "beam and additions must be >= 1";
   else if (max_fitted_singles < 0) why = "max_fitted_singles must be >= 0";
   else if (reduced_model_min_dofs < 0) why = "reduced_model_min_dofs must be >= 0 (0: always full solves)";
+  else if (kept_centres < 1) why = "kept_centres must be >= 1";
   else if (exact_candidates < 1) why = "exact_candidates must be >= 1";
   else if (polish_swaps < 0) why = "polish_swaps must be >= 0";
   else if (!(exact_margin >= 0.0)) why = "exact_margin must be >= 0 (nats; infinity: no margin)";

@@ -105,6 +105,12 @@ struct Evaluator::Reduced {
   /// of sets, and makes a set's model again once it was dropped).
   std::deque<std::pair<std::size_t, std::string>> recent;
   static constexpr std::size_t kKept = 512;
+  /// Factories of centres other than the nominal one in order of last use: at most
+  /// DiagnoseOptions::kept_centres stay (each holds a factorisation of K − σM and its probes'
+  /// responses: gigabytes at 200 000 DOFs, where the diagnosis centres on a dozen sets in turn and
+  /// grew past 11 GB); a factory's reduced models go with it, and a centre met again is solved
+  /// again (the same numbers: the solve is deterministic).
+  std::deque<std::pair<std::size_t, std::string>> recent_factories;
 };
 
 Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options,
@@ -215,6 +221,22 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
       ro.enriched_modes = std::min(max_modes_, test_modes + 4);
       factory = std::make_unique<model::ReducedModelFactory>(centred, so, ro);
       ++solves_;
+    }
+    if (const std::pair<std::size_t, std::string> factory_key{s, centre_key};
+        !centre_key.empty() && (r.recent_factories.empty() || r.recent_factories.back() != factory_key)) {
+      std::erase(r.recent_factories, factory_key);
+      r.recent_factories.push_back(factory_key);
+      while (r.recent_factories.size() > static_cast<std::size_t>(options_.kept_centres)) {
+        const std::pair<std::size_t, std::string> old = r.recent_factories.front();
+        r.recent_factories.pop_front();
+        const std::string prefix = old.second + "|";
+        auto of_old = [&](const std::pair<std::size_t, std::string>& k) {
+          return k.first == old.first && k.second.starts_with(prefix);
+        };
+        std::erase_if(r.models, [&](const auto& entry) { return of_old(entry.first); });
+        std::erase_if(r.recent, of_old);
+        r.factories.erase(old);
+      }
     }
     const std::pair<std::size_t, std::string> model_key{s, centre_key + "|" + key};
     auto& reduced = r.models[model_key];

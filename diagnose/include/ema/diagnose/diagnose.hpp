@@ -137,6 +137,11 @@ struct DiagnoseOptions {
   /// best `exact_candidates` re-fitted on a basis centred at their values and reported from full
   /// solves. 0: always full solves.
   int reduced_model_min_dofs = 200;
+  /// FE-sized models: reduced-model factories (a full solve and a factorisation of K − σM each,
+  /// with its probes' responses: gigabytes at 200 000 DOFs) kept for centres other than the
+  /// nominal one, the least recently used dropped beyond this many with their reduced models; a
+  /// centre met again is solved again, to the same numbers.
+  int kept_centres = 3;
   int exact_candidates = 8;
   /// FE-sized models: of those (and their subsets), a set whose reduced-model score, less the most
   /// by which a reduced score has overstated a full one in the checks so far, is more than this many
