@@ -94,23 +94,43 @@ double RobustCost(const Eigen::VectorXd& r, const std::vector<int>& block_start,
   return cost;
 }
 
+namespace {
+
+using SetupKey = std::pair<std::size_t, std::string>;  // a setup's index and a centre's or model's key
+
+// `key` becomes the most recently used of `order`; the least recently used beyond `kept` leave it,
+// each handed to `drop` to free what it names.
+template <class Drop>
+void MarkUsed(std::deque<SetupKey>* order, const SetupKey& key, std::size_t kept, Drop drop) {
+  if (!order->empty() && order->back() == key) return;
+  std::erase(*order, key);
+  order->push_back(key);
+  while (order->size() > kept) {
+    const SetupKey old = order->front();
+    order->pop_front();
+    drop(old);
+  }
+}
+
+}  // namespace
+
 // The reduced models of an FE-sized model: one factory per setup and centre (a full solve and a
 // factorisation each), one reduced model per set of probes.
 struct Evaluator::Reduced {
   model::Model skeleton;  // the base without its [fe] matrices, DOF map and node positions: effects are applied to copies of it
-  std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModelFactory>> factories;
-  std::map<std::pair<std::size_t, std::string>, std::unique_ptr<model::ReducedModel>> models;
+  std::map<SetupKey, std::unique_ptr<model::ReducedModelFactory>> factories;
+  std::map<SetupKey, std::unique_ptr<model::ReducedModel>> models;
   /// Reduced models in order of last use: at most kKept stay (each holds a few b × b matrices, b a
   /// few dozen — the n-sized probe blocks live once in the factory; a diagnosis visits hundreds
   /// of sets, and makes a set's model again once it was dropped).
-  std::deque<std::pair<std::size_t, std::string>> recent;
+  std::deque<SetupKey> recent;
   static constexpr std::size_t kKept = 512;
   /// Factories of centres other than the nominal one in order of last use: at most
   /// DiagnoseOptions::kept_centres stay (each holds a factorisation of K − σM and its probes'
   /// responses: gigabytes at 200 000 DOFs, where the diagnosis centres on a dozen sets in turn and
-  /// grew past 11 GB); a factory's reduced models go with it, and a centre met again is solved
+  /// grew past 16 GB); a factory's reduced models go with it, and a centre met again is solved
   /// again (the same numbers: the solve is deterministic).
-  std::deque<std::pair<std::size_t, std::string>> recent_factories;
+  std::deque<SetupKey> recent_factories;
 };
 
 Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options,
@@ -222,33 +242,19 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
       factory = std::make_unique<model::ReducedModelFactory>(centred, so, ro);
       ++solves_;
     }
-    if (const std::pair<std::size_t, std::string> factory_key{s, centre_key};
-        !centre_key.empty() && (r.recent_factories.empty() || r.recent_factories.back() != factory_key)) {
-      std::erase(r.recent_factories, factory_key);
-      r.recent_factories.push_back(factory_key);
-      while (r.recent_factories.size() > static_cast<std::size_t>(options_.kept_centres)) {
-        const std::pair<std::size_t, std::string> old = r.recent_factories.front();
-        r.recent_factories.pop_front();
-        const std::string prefix = old.second + "|";
-        auto of_old = [&](const std::pair<std::size_t, std::string>& k) {
-          return k.first == old.first && k.second.starts_with(prefix);
-        };
-        std::erase_if(r.models, [&](const auto& entry) { return of_old(entry.first); });
-        std::erase_if(r.recent, of_old);
-        r.factories.erase(old);
-      }
-    }
-    const std::pair<std::size_t, std::string> model_key{s, centre_key + "|" + key};
+    if (!centre_key.empty())
+      MarkUsed(&r.recent_factories, {s, centre_key}, static_cast<std::size_t>(options_.kept_centres),
+               [&](const SetupKey& old) {
+                 const std::string prefix = old.second + "|";
+                 auto of_old = [&](const SetupKey& k) { return k.first == old.first && k.second.starts_with(prefix); };
+                 std::erase_if(r.models, [&](const auto& entry) { return of_old(entry.first); });
+                 std::erase_if(r.recent, of_old);
+                 r.factories.erase(old);
+               });
+    const SetupKey model_key{s, centre_key + "|" + key};
     auto& reduced = r.models[model_key];
     if (!reduced) reduced = factory->Make(probes);
-    if (r.recent.empty() || r.recent.back() != model_key) {
-      std::erase(r.recent, model_key);
-      r.recent.push_back(model_key);
-      while (r.recent.size() > Reduced::kKept) {
-        r.models.erase(r.recent.front());
-        r.recent.pop_front();
-      }
-    }
+    MarkUsed(&r.recent, model_key, Reduced::kKept, [&](const SetupKey& old) { r.models.erase(old); });
     ++reduced_solves_;
     so.extra_masses = sensors;
     return reduced->Solve(changed, so, rest_changed);

@@ -168,12 +168,11 @@ const ReducedModelFactory::ProbeBlock& ReducedModelFactory::Block(const std::vec
   const std::string key = KeyOf(probe);
   auto it = blocks_.find(key);
   if (it != blocks_.end()) return it->second;
-  const Eigen::MatrixXd w = Responses(probe);
   ProbeBlock block;
-  block.responses = w;
+  block.responses = Responses(probe);
   // M-orthogonal to Φ (twice, for round-off): the reduced models' k0 then has Λ on Φ's block and
   // no coupling to the responses.
-  for (int pass = 0; pass < 2 && w.cols() > 0; ++pass)
+  for (int pass = 0; pass < 2 && block.responses.cols() > 0; ++pass)
     block.responses -= solution_.full_shapes * (mass_modes_.transpose() * block.responses);
   block.observed = system_.observation * block.responses;
   block.mass_gram = block.responses.transpose() * (system_.mass * block.responses);
