@@ -10,6 +10,7 @@ packages=(build-essential cmake pkg-config libeigen3-dev libfftw3-dev libceres-d
           python3-scipy python3-venv python3-pip python3-setuptools python3-wheel  # pip install . (docs/python.md)
           libcpp-httplib-dev  # cpp-httplib: the local server of ema pick (docs/pick.md)
           libsuitesparse-dev  # CHOLMOD: the supernodal sparse Cholesky of FE-sized solves (docs/fe-parts.md)
+          libopenblas-dev  # the BLAS under CHOLMOD and the block Lanczos: kernels for the CPU at run time (CMakeLists.txt)
           calculix-ccx)  # CalculiX: the FE code of the bolted-frame sample (samples/bolted-frame)
 if [[ "${1:-}" == "--test" ]]; then
   packages+=(chromium clang python3-pytest

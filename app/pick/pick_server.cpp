@@ -67,6 +67,13 @@ pid_t OpenInBrowser(const std::string& url) {
   return pid;
 }
 
+// A stop signal delivered to a thread that does not block it: the BLAS library's worker threads
+// (OpenBLAS makes its pool when it is loaded, before serving blocks the signals in this process's
+// threads) would otherwise take Ctrl-C by its default action and kill `ema pick` mid-write. The
+// handler only records it (a lock-free atomic is async-signal-safe); the watcher acts on it.
+std::atomic<int> stray_stop_signal{0};
+void RecordStopSignal(int signal) { stray_stop_signal.store(signal); }
+
 }  // namespace
 
 std::string RandomHexToken(int bytes) {
@@ -202,17 +209,25 @@ int ServePick(PickSession& session, const PickOptions& options, std::ostream& ou
 
   // SIGINT/SIGTERM are blocked on every thread while serving and taken by a watcher thread, which
   // stops the server: Ctrl-C ends `ema pick` as Done does (exit 0), never in a handler's middle.
+  // Threads made before (a BLAS pool) do not block them: there a handler records the signal.
   sigset_t stop_signals, previous;
   sigemptyset(&stop_signals);
   sigaddset(&stop_signals, SIGINT);
   sigaddset(&stop_signals, SIGTERM);
+  struct sigaction record = {}, previous_int = {}, previous_term = {};
+  record.sa_handler = RecordStopSignal;
+  sigemptyset(&record.sa_mask);
+  stray_stop_signal = 0;
+  sigaction(SIGINT, &record, &previous_int);
+  sigaction(SIGTERM, &record, &previous_term);
   pthread_sigmask(SIG_BLOCK, &stop_signals, &previous);
   std::atomic<bool> serving{true};
   int caught = 0;
   std::thread watcher([&] {
     const timespec tick = {0, 200 * 1000 * 1000};
     while (serving) {
-      const int signal = sigtimedwait(&stop_signals, nullptr, &tick);
+      int signal = sigtimedwait(&stop_signals, nullptr, &tick);
+      if (signal <= 0) signal = stray_stop_signal.exchange(0);
       if (signal <= 0) continue;
       caught = signal;
       // Repeated until the loop has ended: a signal may come before listening has begun.
@@ -241,7 +256,10 @@ int ServePick(PickSession& session, const PickOptions& options, std::ostream& ou
       sigtimedwait(&one, nullptr, &now);
       caught = s;
     }
+  if (const int stray = stray_stop_signal.exchange(0); stray > 0) caught = stray;
   pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+  sigaction(SIGINT, &previous_int, nullptr);
+  sigaction(SIGTERM, &previous_term, nullptr);
   if (browser > 0) waitpid(browser, nullptr, WNOHANG);  // reaped if it is done; never waited for
   if (!listened && !done && !caught) throw InputError(url, "the server stopped unexpectedly");
   out << "ema pick: " << (done ? "done" : caught == SIGTERM ? "stopped (SIGTERM)" : "stopped (Ctrl-C)") << std::endl;

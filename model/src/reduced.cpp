@@ -17,7 +17,7 @@
 namespace ema::model {
 
 struct ReducedModelFactory::Factorisation {
-  detail::SparseFactor ldlt;
+  std::unique_ptr<detail::SparseFactor> ldlt;
 };
 
 namespace {
@@ -95,7 +95,8 @@ ReducedModelFactory::ReducedModelFactory(const Model& input, const SolveOptions&
   options_.extra_masses.clear();
   SolveOptions full = options_;
   full.max_modes = std::max(options.modes, solve.max_modes);
-  solution_ = model::Solve(base, full);
+  factorisation_ = std::make_unique<Factorisation>();
+  solution_ = detail::SolveKeepingFactor(base, full, &factorisation_->ldlt);
   system_ = Assemble(base, options_);
   rest_ = Assemble(base, options_, FeAssembly::kNone);
   const auto m = solution_.full_shapes.cols();
@@ -103,14 +104,17 @@ ReducedModelFactory::ReducedModelFactory(const Model& input, const SolveOptions&
   for (Eigen::Index j = 0; j < m; ++j)
     lambda_(j) = std::pow(kTwoPi * solution_.modes.modes[static_cast<std::size_t>(j)].frequency_hz, 2);
   // The same shift and rigid-body limit as the sparse solver (solve.cpp): K − σM is definite with
-  // rigid-body modes and massless DOFs alike.
+  // rigid-body modes and massless DOFs alike. The solve's own factorisation when it took the
+  // sparse path (the same matrix but for the massless DOFs' 1e-12 mass), else one made here.
   const double scale = system_.stiffness.diagonal().sum() / system_.mass.diagonal().sum();
   const double sigma = -std::max(1.0, options_.sparse_shift * scale);
   rigid_limit_ = std::max(std::pow(kTwoPi * options_.rigid_frequency_hz, 2), options_.rigid_tolerance * scale);
-  factorisation_ = std::make_unique<Factorisation>();
-  const Eigen::SparseMatrix<double> shifted = system_.stiffness - sigma * system_.mass;
-  if (!factorisation_->ldlt.Compute(shifted))
-    throw InputError(origin, "factorisation of K - sigma M failed (the reduced model of the diagnosis needs it)");
+  if (!factorisation_->ldlt) {
+    factorisation_->ldlt = std::make_unique<detail::SparseFactor>();
+    const Eigen::SparseMatrix<double> shifted = system_.stiffness - sigma * system_.mass;
+    if (!factorisation_->ldlt->Compute(shifted))
+      throw InputError(origin, "factorisation of K - sigma M failed (the reduced model of the diagnosis needs it)");
+  }
   mass_modes_ = system_.mass * solution_.full_shapes;
   observed_modes_ = system_.observation * solution_.full_shapes;
   rest_assembler_ = std::make_unique<detail::RestAssembler>(base);
@@ -211,13 +215,10 @@ Eigen::MatrixXd ReducedModelFactory::Responses(const std::vector<Effect>& probe)
       if (touched[static_cast<size_t>(i)]) rows.push_back(i);
   }
   if (!rows.empty() && static_cast<Eigen::Index>(rows.size()) <= std::max<Eigen::Index>(24, 2 * q)) {
-    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(DofCount(), static_cast<Eigen::Index>(rows.size()));
-    Eigen::VectorXd unit = Eigen::VectorXd::Zero(DofCount());
-    for (size_t k = 0; k < rows.size(); ++k) {
-      unit(rows[k]) = 1.0;
-      w.col(static_cast<Eigen::Index>(k)) = factorisation_->ldlt.Solve(unit);
-      unit(rows[k]) = 0.0;
-    }
+    // One solve with a block of unit loads (BLAS-3 in the supernodal solve, the factor read once).
+    Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(DofCount(), static_cast<Eigen::Index>(rows.size()));
+    for (size_t k = 0; k < rows.size(); ++k) unit(rows[k], static_cast<Eigen::Index>(k)) = 1.0;
+    const Eigen::MatrixXd w = factorisation_->ldlt->Solve(unit);
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(w);
     qr.setThreshold(1e-10);
     Eigen::MatrixXd basis = qr.householderQ() * Eigen::MatrixXd::Identity(w.rows(), qr.rank());
@@ -229,10 +230,10 @@ Eigen::MatrixXd ReducedModelFactory::Responses(const std::vector<Effect>& probe)
   // First and second order: w1 = A⁻¹ (ΔK − λΔM) φ (the mode-shape sensitivity's direction),
   // w2 = A⁻¹ (ΔK − λΔM) w1 (what a large change — a joint 20× softer — adds to it).
   Eigen::MatrixXd w(rhs.rows(), 2 * rhs.cols());
-  for (Eigen::Index j = 0; j < q; ++j) w.col(j) = factorisation_->ldlt.Solve(rhs.col(j));
+  w.leftCols(q) = factorisation_->ldlt->Solve(rhs);
   Eigen::MatrixXd rhs2 = d.stiffness * w.leftCols(q);
   if (d.mass.nonZeros() > 0) rhs2 -= (d.mass * w.leftCols(q)) * lambda_.head(q).asDiagonal();
-  for (Eigen::Index j = 0; j < q; ++j) w.col(q + j) = factorisation_->ldlt.Solve(rhs2.col(j));
+  w.rightCols(q) = factorisation_->ldlt->Solve(rhs2);
   // Kept as an orthonormal basis of their span (column-pivoted QR, directions below 1e-8 of the
   // largest dropped): a low-rank change has few directions, and each costs memory per DOF.
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(w);

@@ -1,6 +1,7 @@
 // Assembly of M and K at the operating point and the generalised eigenproblem K phi = w^2 M phi.
 #include "ema/model/solve.hpp"
 #include "assembly.hpp"
+#include "block_lanczos.hpp"
 #include "sparse_factor.hpp"
 
 #include <Eigen/Dense>
@@ -351,28 +352,24 @@ void detail::RestAssembler::Assemble(const Model& model, const SolveOptions& opt
 
 namespace {
 
-/// (K - sigma M)^-1 x with a sparse Cholesky factorisation (sparse_factor.hpp), for Spectra's
-/// shift-invert mode.
-class LdltShiftInvert {
+/// (K - sigma M)^-1 x with a factorisation made beforehand (sparse_factor.hpp), for Spectra's
+/// shift-invert mode (its constructor sets the same shift again: nothing to do).
+class FactorShiftInvert {
  public:
   using Scalar = double;
-  LdltShiftInvert(const Eigen::SparseMatrix<double>& k, const Eigen::SparseMatrix<double>& m) : k_(k), m_(m) {}
-  Eigen::Index rows() const { return k_.rows(); }
-  Eigen::Index cols() const { return k_.cols(); }
-  void set_shift(double sigma) {
-    const Eigen::SparseMatrix<double> a = k_ - sigma * m_;
-    if (!solver_.Compute(a)) throw InputError("", "sparse factorisation of K - sigma M failed");
-  }
+  explicit FactorShiftInvert(const detail::SparseFactor& factor, Eigen::Index n) : factor_(factor), n_(n) {}
+  Eigen::Index rows() const { return n_; }
+  Eigen::Index cols() const { return n_; }
+  void set_shift(double) {}
   void perform_op(const double* x_in, double* y_out) const {
-    Eigen::Map<const Eigen::VectorXd> x(x_in, k_.rows());
-    Eigen::Map<Eigen::VectorXd> y(y_out, k_.rows());
-    y.noalias() = solver_.Solve(x);
+    Eigen::Map<const Eigen::VectorXd> x(x_in, n_);
+    Eigen::Map<Eigen::VectorXd> y(y_out, n_);
+    y.noalias() = factor_.Solve(x);
   }
 
  private:
-  const Eigen::SparseMatrix<double>& k_;
-  const Eigen::SparseMatrix<double>& m_;
-  detail::SparseFactor solver_;
+  const detail::SparseFactor& factor_;
+  Eigen::Index n_;
 };
 
 // Where system DOF i comes from, for messages: its body's line in the model file, or the FE
@@ -428,7 +425,11 @@ int FirstNonPositivePivot(Eigen::MatrixXd m) {
 
 }  // namespace
 
-Solution Solve(const Model& input, const SolveOptions& options) {
+Solution Solve(const Model& input, const SolveOptions& options) { return detail::SolveKeepingFactor(input, options, nullptr); }
+
+Solution detail::SolveKeepingFactor(const Model& input, const SolveOptions& options,
+                                    std::unique_ptr<SparseFactor>* kept_factor) {
+  if (kept_factor) kept_factor->reset();
   const Model applied = input.effects.empty() ? Model() : ApplyEffects(input);
   const Model& model = input.effects.empty() ? input : applied;
   const std::string origin = model.origin.empty() ? "model" : model.origin;
@@ -512,18 +513,38 @@ Solution Solve(const Model& input, const SolveOptions& options) {
     // further: the lowest modes converge by how far apart they lie after the shift-inversion.
     const double scale = sys.stiffness.diagonal().sum() / mass.diagonal().sum();
     const double sigma = -std::max(1.0, options.sparse_shift * scale);
-    LdltShiftInvert op(sys.stiffness, mass);
-    Spectra::SparseSymMatProd<double> bop(mass);
-    Spectra::SymGEigsShiftSolver<LdltShiftInvert, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert>
-        solver(op, bop, nev, ncv, sigma);
-    solver.init();
-    solver.compute(Spectra::SortRule::LargestMagn, 1000, 1e-10, Spectra::SortRule::SmallestAlge);
-    if (solver.info() != Spectra::CompInfo::Successful)
-      throw ConvergenceError(origin, "sparse eigenvalue solution did not converge");
-    eigenvalues = solver.eigenvalues();
-    vectors = solver.eigenvectors();
+    auto factor = std::make_unique<detail::SparseFactor>();
+    if (!factor->Compute(Eigen::SparseMatrix<double>(sys.stiffness - sigma * mass)))
+      throw InputError(origin, "sparse factorisation of K - sigma M failed");
+    // Block Lanczos (block_lanczos.hpp) where the basis is small beside the model — every FE-sized
+    // model; Spectra's single-vector Lanczos for the few hundred DOFs below that.
+    detail::BlockLanczosOptions lanczos;
+    lanczos.wanted = nev;
+    lanczos.block_size = std::clamp(nev / 3, 4, 12);
+    const int basis = std::max(3 * nev, nev + 4 * lanczos.block_size) + lanczos.block_size;
+    if (n >= 4 * basis) {
+      const detail::BlockLanczosSummary summary = detail::LowestEigenpairs(*factor, sigma, mass, lanczos);
+      if (!summary.converged)
+        throw ConvergenceError(origin, "sparse eigenvalue solution did not converge (block Lanczos, " +
+                                           std::to_string(summary.block_solves) + " block solves)");
+      eigenvalues = summary.eigenvalues;
+      vectors = summary.vectors;
+      sol.shift_invert_solves = summary.columns_solved;
+    } else {
+      FactorShiftInvert op(*factor, n);
+      Spectra::SparseSymMatProd<double> bop(mass);
+      Spectra::SymGEigsShiftSolver<FactorShiftInvert, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert>
+          solver(op, bop, nev, ncv, sigma);
+      solver.init();
+      solver.compute(Spectra::SortRule::LargestMagn, 1000, 1e-10, Spectra::SortRule::SmallestAlge);
+      if (solver.info() != Spectra::CompInfo::Successful)
+        throw ConvergenceError(origin, "sparse eigenvalue solution did not converge");
+      eigenvalues = solver.eigenvalues();
+      vectors = solver.eigenvectors();
+      sol.shift_invert_solves = static_cast<int>(solver.num_operations());
+    }
+    if (kept_factor) *kept_factor = std::move(factor);
     sparse_scale = scale;
-    sol.shift_invert_solves = static_cast<int>(solver.num_operations());
   }
   const double lambda_max = eigenvalues.cwiseAbs().maxCoeff();
   // The sparse path only sees the lowest eigenvalues: its relative limit is to trace(K)/trace(M),
