@@ -27,7 +27,10 @@ inline void ReportProgress(const ProgressCallback& progress, double fraction, st
 /// reports the share done, mapped onto [from, to], one call at a time. At most about a thousand
 /// reports over the stage (every total/1000-th step, and the last): a million small steps make no
 /// million calls, and a cancelling callback is still asked every thousandth of the stage. What the
-/// callback throws comes out of Step(). `stage` must outlive the object (a string literal).
+/// callback throws comes out of Step(), and the callback is not called again by this stage: the
+/// other threads stop at their next step, but until the exception has reached RunOnThreads and
+/// raised its stop flag — a while under a sanitizer or on a loaded machine — they would still report
+/// to a callback that has said stop. `stage` must outlive the object (a string literal).
 class StepProgress {
  public:
   StepProgress(ProgressCallback progress, std::string_view stage, std::size_t total, double from = 0.0,
@@ -37,16 +40,23 @@ class StepProgress {
   void Step() {
     if (!progress_) return;
     std::lock_guard<std::mutex> lock(mutex_);
+    if (stopped_) return;
     ++done_;
     if (done_ % every_ != 0 && done_ != total_) return;
     const double share = static_cast<double>(std::min(done_, total_)) / static_cast<double>(total_);
-    progress_(from_ + (to_ - from_) * share, stage_);
+    try {
+      progress_(from_ + (to_ - from_) * share, stage_);
+    } catch (...) {
+      stopped_ = true;
+      throw;
+    }
   }
 
  private:
   ProgressCallback progress_;
   std::string_view stage_;
   std::size_t total_, every_, done_ = 0;
+  bool stopped_ = false;  // the callback threw: not called again
   double from_, to_;
   std::mutex mutex_;
 };
