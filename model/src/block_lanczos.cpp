@@ -43,6 +43,21 @@ void Product(bool transpose, const Eigen::Ref<const MatrixXd>& a, const Eigen::R
 #endif
 }
 
+// n × columns of independent standard normal numbers: the start block, and new directions where
+// the Krylov space has none left.
+MatrixXd RandomBlock(Eigen::Index n, Eigen::Index columns, std::mt19937* rng) {
+  std::normal_distribution<double> normal;
+  MatrixXd out(n, columns);
+  for (Eigen::Index j = 0; j < columns; ++j)
+    for (Eigen::Index i = 0; i < n; ++i) out(i, j) = normal(*rng);
+  return out;
+}
+
+// The largest M-norm among the columns of x (mx = M x).
+double LargestMassNorm(const MatrixXd& x, const MatrixXd& mx) {
+  return std::sqrt(x.cwiseProduct(mx).colwise().sum().maxCoeff());
+}
+
 // A block of vectors with M times it, kept alongside: every update of one is made to the other,
 // so M-inner products with the basis are products with MV, not sparse products with M.
 struct Block {
@@ -110,10 +125,7 @@ MatrixXd OrthonormaliseBlock(const Eigen::SparseMatrix<double>& mass, const Eige
   next.x.leftCols(rank) = w->x * q;
   next.mx.leftCols(rank) = w->mx * q;
   if (rank < b) {
-    std::normal_distribution<double> normal;
-    Block fill{MatrixXd(n, b - rank), MatrixXd()};
-    for (Eigen::Index j = 0; j < fill.x.cols(); ++j)
-      for (Eigen::Index i = 0; i < n; ++i) fill.x(i, j) = normal(*rng);
+    Block fill{RandomBlock(n, b - rank, rng), MatrixXd()};
     for (int pass = 0; pass < 2; ++pass) {
       Reorthogonalise(basis, mass_basis, 0, &fill.x);
       if (rank > 0) Reorthogonalise(next.x.leftCols(rank), next.mx.leftCols(rank), 0, &fill.x);
@@ -138,12 +150,18 @@ MatrixXd OrthonormaliseBlock(const Eigen::SparseMatrix<double>& mass, const Eige
 
 }  // namespace
 
+int BasisColumns(const BlockLanczosOptions& options) {
+  const int nev = options.wanted, b = options.block_size;
+  const int max_basis = options.max_basis > 0 ? std::max(options.max_basis, nev + 3 * b) : std::max(3 * nev, nev + 4 * b);
+  return max_basis + b;
+}
+
 BlockLanczosSummary LowestEigenpairs(const SparseFactor& factor, double sigma, const Eigen::SparseMatrix<double>& mass,
                                      const BlockLanczosOptions& options) {
   if (std::string why; !options.IsValid(&why)) throw UsageError("block Lanczos options: " + why);
   const Eigen::Index n = mass.rows();
   const int nev = options.wanted, b = options.block_size;
-  const int max_basis = options.max_basis > 0 ? std::max(options.max_basis, nev + 3 * b) : std::max(3 * nev, nev + 4 * b);
+  const int max_basis = BasisColumns(options) - b;
   if (n < max_basis + b) throw UsageError("block Lanczos needs more DOFs than its basis (" + std::to_string(max_basis + b) + ")");
   const int kept_on_restart = nev + b;  // ≤ max_basis − 2b: a restart always frees a block or more
 
@@ -153,13 +171,9 @@ BlockLanczosSummary LowestEigenpairs(const SparseFactor& factor, double sigma, c
   MatrixXd v(n, max_basis + b), mv(n, max_basis + b);
   MatrixXd t = MatrixXd::Zero(max_basis + b, max_basis + b);  // Vᵀ M (K − σM)⁻¹ M V
   {
-    std::normal_distribution<double> normal;
-    Block start{MatrixXd(n, b), MatrixXd()};
-    for (Eigen::Index j = 0; j < b; ++j)
-      for (Eigen::Index i = 0; i < n; ++i) start.x(i, j) = normal(rng);
+    Block start{RandomBlock(n, b, &rng), MatrixXd()};
     start.mx = mass * start.x;
-    const double scale = std::sqrt((start.x.cwiseProduct(start.mx)).colwise().sum().maxCoeff());
-    OrthonormaliseBlock(mass, v.leftCols(0), mv.leftCols(0), scale, &start, &rng);
+    OrthonormaliseBlock(mass, v.leftCols(0), mv.leftCols(0), LargestMassNorm(start.x, start.mx), &start, &rng);
     v.leftCols(b) = start.x;
     mv.leftCols(b) = start.mx;
   }

@@ -37,6 +37,10 @@ struct BlockLanczosOptions {
   }
 };
 
+/// The columns the solver holds: the largest basis (`max_basis`, or its default) and the next block.
+/// It needs more DOFs than this; solve.cpp uses it only where the model has four times as many.
+int BasisColumns(const BlockLanczosOptions& options);
+
 struct BlockLanczosSummary {
   Eigen::VectorXd eigenvalues;  ///< λ, ascending (wanted of them)
   Eigen::MatrixXd vectors;      ///< M-orthonormal eigenvectors, one column per λ

@@ -521,8 +521,7 @@ Solution detail::SolveKeepingFactor(const Model& input, const SolveOptions& opti
     detail::BlockLanczosOptions lanczos;
     lanczos.wanted = nev;
     lanczos.block_size = std::clamp(nev / 3, 4, 12);
-    const int basis = std::max(3 * nev, nev + 4 * lanczos.block_size) + lanczos.block_size;
-    if (n >= 4 * basis) {
+    if (n >= 4 * detail::BasisColumns(lanczos)) {
       const detail::BlockLanczosSummary summary = detail::LowestEigenpairs(*factor, sigma, mass, lanczos);
       if (!summary.converged)
         throw ConvergenceError(origin, "sparse eigenvalue solution did not converge (block Lanczos, " +
