@@ -2,6 +2,7 @@
 // error in units of that mode's σ and the shape's difference at each measured DOF in units of its
 // σ there (or one (1 − MAC) in units of the shape σ). Pairing is redone at
 // every evaluation, so mode swaps while the parameters move are followed.
+#include <cstdio>
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -131,7 +132,28 @@ struct Evaluator::Reduced {
   /// grew past 16 GB); a factory's reduced models go with it, and a centre met again is solved
   /// again (the same numbers: the solve is deterministic).
   std::deque<SetupKey> recent_factories;
+  /// Per factory, its centre's effects to the last digit (ExactKey): the factory's own full solve
+  /// is then an exact evaluation there (Evaluate takes it instead of solving again).
+  std::map<SetupKey, std::string> exact_keys;
 };
+
+namespace {
+// A set of effects to the last digit of every parameter (model::Describe rounds to 6 digits: it
+// names a centre, not a point).
+std::string ExactKey(const std::vector<model::Effect>& effects) {
+  std::string key;
+  char number[32];
+  for (const auto& e : effects) {
+    key += model::Describe(e);
+    for (const auto& [name, value] : e.parameters) {
+      std::snprintf(number, sizeof number, "%.17g", value);
+      key += " " + name + "=" + number;
+    }
+    key += ";";
+  }
+  return key;
+}
+}  // namespace
 
 Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options,
                      int max_modes)
@@ -192,7 +214,29 @@ Evaluation Evaluator::Evaluate(const std::vector<model::Effect>& effects) {
     out.error = e.what();
     return out;
   }
+  std::string centre_key, exact_key;
+  if (reduced_) {
+    for (const auto& e : effects) centre_key += model::Describe(e) + ";";
+    exact_key = ExactKey(effects);
+  }
   return Compare([&](std::size_t s, const std::vector<model::PointMass>& sensors) {
+    if (reduced_ && sensors.empty()) {
+      // A reduced-model factory centred exactly here has solved this very model (without the
+      // test's sensors, as here): its lowest modes are this solve's (a check of a set re-centred
+      // at its values costs one full solve, not two).
+      const SetupKey key{s, centre_key};
+      const auto factory = reduced_models_->factories.find(key);
+      const auto made_at = reduced_models_->exact_keys.find(key);
+      if (factory != reduced_models_->factories.end() && made_at != reduced_models_->exact_keys.end() &&
+          made_at->second == exact_key) {
+        model::Solution sol;
+        sol.modes = factory->second->BaseSolution().modes;
+        sol.rigid_body_frequencies_hz = factory->second->BaseSolution().rigid_body_frequencies_hz;
+        if (static_cast<int>(sol.modes.modes.size()) > max_modes_) sol.modes.modes.resize(static_cast<std::size_t>(max_modes_));
+        ++reused_centre_solves_;
+        return sol;
+      }
+    }
     model::SolveOptions so;
     so.setup = setups_[s].name;
     so.max_modes = max_modes_;
@@ -240,6 +284,7 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
       ro.modes = max_modes_ + 10;
       ro.enriched_modes = std::min(max_modes_, test_modes + 4);
       factory = std::make_unique<model::ReducedModelFactory>(centred, so, ro);
+      r.exact_keys[{s, centre_key}] = ExactKey(centre);
       ++solves_;
     }
     if (!centre_key.empty())
@@ -250,6 +295,7 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
                  std::erase_if(r.models, [&](const auto& entry) { return of_old(entry.first); });
                  std::erase_if(r.recent, of_old);
                  r.factories.erase(old);
+                 r.exact_keys.erase(old);
                });
     const SetupKey model_key{s, centre_key + "|" + key};
     auto& reduced = r.models[model_key];

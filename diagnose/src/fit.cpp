@@ -3,6 +3,7 @@
 //   log Z ≈ −½ J(θ*) + log p(θ*) + (k/2) ln 2π − ½ ln det H,
 // J the robust misfit in σ, p the prior in θ, H = Σ_b w_b J_bᵀJ_b + prior curvature the
 // posterior Hessian (Gauss–Newton, Huber weights w_b per mode block).
+#include <algorithm>
 #include <ceres/ceres.h>
 
 #include "ema/core/solver_logging.hpp"
@@ -114,6 +115,26 @@ std::shared_ptr<const Evaluation> Problem::At(const std::vector<int>& set, const
         centre != centres_.end() ? Effects(set, centre->second) : std::vector<model::Effect>{};
     return evaluator_->EvaluateReduced(key, probes, centred, Effects(set, theta));
   });
+}
+
+std::shared_ptr<const Evaluation> Problem::AtCentreOf(const std::vector<int>& centre_set, const std::vector<int>& set,
+                                                      const std::vector<double>& theta) {
+  const auto centre = centres_.find(centre_set);
+  if (set.empty() || !evaluator_->UsesReducedModels() || centre == centres_.end()) return Exact(set, theta);
+  // Probes as At makes them: an atom of the centre's set from its value there, the others from
+  // their reference.
+  std::vector<std::vector<model::Effect>> probes;
+  std::string key;
+  for (size_t k = 0; k < set.size(); ++k) {
+    const Atom& a = (*atoms_)[set[k]];
+    const auto in_centre = std::find(centre_set.begin(), centre_set.end(), set[k]);
+    const double at = in_centre != centre_set.end() ? centre->second[static_cast<size_t>(in_centre - centre_set.begin())] - 0.5
+                                                    : (a.spec.absent_end == 0 ? -0.5 : 0.0);
+    probes.push_back({a.With(at)});
+    key += std::to_string(set[k]) + ",";
+  }
+  return std::make_shared<const Evaluation>(
+      evaluator_->EvaluateReduced(key, probes, Effects(centre_set, centre->second), Effects(set, theta)));
 }
 
 std::shared_ptr<const Evaluation> Problem::Exact(const std::vector<int>& set, const std::vector<double>& theta) {

@@ -145,6 +145,8 @@ class Evaluator {
   const Eigen::VectorXd& ModelErrorTrend() const { return model_error_trend_; }
   int Solves() const { return solves_; }
   int ReducedSolves() const { return reduced_solves_; }
+  /// Exact evaluations answered by a reduced-model factory's own solve at its centre.
+  int ReusedCentreSolves() const { return reused_centre_solves_; }
   /// Exact: the model with `effects` solved in full for every setup.
   Evaluation Evaluate(const std::vector<model::Effect>& effects);
   /// True when the model is FE-sized (DiagnoseOptions::reduced_model_min_dofs): EvaluateReduced
@@ -173,6 +175,7 @@ class Evaluator {
   Eigen::VectorXd model_error_trend_;
   int solves_ = 0;
   int reduced_solves_ = 0;
+  int reused_centre_solves_ = 0;
   bool reduced_ = false;
   std::unique_ptr<Reduced> reduced_models_;
 };
@@ -236,6 +239,12 @@ class Problem {
   /// The evaluation of a set at θ: through the set's reduced model on FE-sized models (centred
   /// where Recentre put it), else exact.
   std::shared_ptr<const Evaluation> At(const std::vector<int>& set, const std::vector<double>& theta);
+  /// The evaluation of a set at θ through a reduced model on the centre of another set,
+  /// `centre_set` (where Recentre put that one; its factorisation and modes reused, the set's
+  /// own probes added: no full solve while that centre is kept). Exact when `centre_set` has no
+  /// centre or the model is not FE-sized. Not cached: At(set, θ) stays on the set's own centre.
+  std::shared_ptr<const Evaluation> AtCentreOf(const std::vector<int>& centre_set, const std::vector<int>& set,
+                                               const std::vector<double>& theta);
   /// Always exact (full solves): what is reported.
   std::shared_ptr<const Evaluation> Exact(const std::vector<int>& set, const std::vector<double>& theta);
   /// From now on, the set's reduced model is centred on θ (its basis from a full solve there).
