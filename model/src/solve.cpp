@@ -542,6 +542,27 @@ Solution detail::SolveKeepingFactor(const Model& input, const SolveOptions& opti
       vectors = solver.eigenvectors();
       sol.shift_invert_solves = static_cast<int>(solver.num_operations());
     }
+    // The eigenvalues as Rayleigh quotients of the vectors with the assembled K and M. With σ just
+    // below zero the shift-invert solves are accurate only to about ε·λmax/(λ − σ), and λ = σ + 1/θ
+    // inherits it: on the 50 004-DOF frame the lowest frequency moved by 1e-3 at random from one
+    // part factor to the next (0.8593 Hz for a slightly stiffer model than one at 0.8601). The
+    // quotient's error is second order in the vector's: the same steps then agree with the reduced
+    // model to 2e-5 (docs/model.md "Eigenvalues from Rayleigh quotients").
+    {
+      const Eigen::MatrixXd kv = sys.stiffness * vectors, mv = mass * vectors;
+      for (Eigen::Index j = 0; j < eigenvalues.size(); ++j)
+        eigenvalues(j) = vectors.col(j).dot(kv.col(j)) / vectors.col(j).dot(mv.col(j));
+      // In ascending order again (two modes closer than the solves' error may swap).
+      std::vector<Eigen::Index> order(static_cast<std::size_t>(eigenvalues.size()));
+      for (std::size_t j = 0; j < order.size(); ++j) order[j] = static_cast<Eigen::Index>(j);
+      std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return eigenvalues(a) < eigenvalues(b); });
+      const Eigen::VectorXd values = eigenvalues;
+      const Eigen::MatrixXd columns = vectors;
+      for (std::size_t j = 0; j < order.size(); ++j) {
+        eigenvalues(static_cast<Eigen::Index>(j)) = values(order[j]);
+        vectors.col(static_cast<Eigen::Index>(j)) = columns.col(order[j]);
+      }
+    }
     if (kept_factor) *kept_factor = std::move(factor);
     sparse_scale = scale;
   }
