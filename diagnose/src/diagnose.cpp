@@ -304,7 +304,10 @@ void BackwardFromChecked(detail::Problem* p, std::vector<detail::Fit>* fits, siz
   const auto at_fit = p->At(big.atoms, big.theta);
   if (!at_fit->ok) return;
   for (size_t k = 0; k < big.atoms.size(); ++k) {
-    const auto [rest, rest_theta] = detail::WithoutOne(big, k);
+    // Not a structured binding: clang 14 (the sanitizer tree's) does not capture one in a lambda.
+    const std::pair<std::vector<int>, std::vector<double>> without_one = detail::WithoutOne(big, k);
+    const std::vector<int>& rest = without_one.first;
+    const std::vector<double>& rest_theta = without_one.second;
     auto small = std::find_if(fits->begin(), fits->end(), [&](const detail::Fit& f) { return f.atoms == rest; });
     if (small == fits->end() || (small->ok && small->exact)) continue;
     std::vector<double> without = big.theta;
