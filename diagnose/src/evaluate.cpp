@@ -2,10 +2,10 @@
 // error in units of that mode's σ and the shape's difference at each measured DOF in units of its
 // σ there (or one (1 − MAC) in units of the shape σ). Pairing is redone at
 // every evaluation, so mode swaps while the parameters move are followed.
-#include <cstdio>
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 
 #include "ema/core/error.hpp"
@@ -233,7 +233,6 @@ Evaluation Evaluator::Evaluate(const std::vector<model::Effect>& effects) {
         sol.modes = factory->second->BaseSolution().modes;
         sol.rigid_body_frequencies_hz = factory->second->BaseSolution().rigid_body_frequencies_hz;
         if (static_cast<int>(sol.modes.modes.size()) > max_modes_) sol.modes.modes.resize(static_cast<std::size_t>(max_modes_));
-        ++reused_centre_solves_;
         return sol;
       }
     }

@@ -145,8 +145,6 @@ class Evaluator {
   const Eigen::VectorXd& ModelErrorTrend() const { return model_error_trend_; }
   int Solves() const { return solves_; }
   int ReducedSolves() const { return reduced_solves_; }
-  /// Exact evaluations answered by a reduced-model factory's own solve at its centre.
-  int ReusedCentreSolves() const { return reused_centre_solves_; }
   /// Exact: the model with `effects` solved in full for every setup.
   Evaluation Evaluate(const std::vector<model::Effect>& effects);
   /// True when the model is FE-sized (DiagnoseOptions::reduced_model_min_dofs): EvaluateReduced
@@ -175,7 +173,6 @@ class Evaluator {
   Eigen::VectorXd model_error_trend_;
   int solves_ = 0;
   int reduced_solves_ = 0;
-  int reused_centre_solves_ = 0;
   bool reduced_ = false;
   std::unique_ptr<Reduced> reduced_models_;
 };
