@@ -119,7 +119,13 @@ void MarkUsed(std::deque<SetupKey>* order, const SetupKey& key, std::size_t kept
 // factorisation each), one reduced model per set of probes.
 struct Evaluator::Reduced {
   model::Model skeleton;  // the base without its [fe] matrices, DOF map and node positions: effects are applied to copies of it
-  std::map<SetupKey, std::unique_ptr<model::ReducedModelFactory>> factories;
+  /// A factory and its centre's effects to the last digit (ExactKey): the factory's own full solve
+  /// is then an exact evaluation there (Evaluate takes it instead of solving again).
+  struct Centre {
+    std::unique_ptr<model::ReducedModelFactory> factory;
+    std::string exact_key;
+  };
+  std::map<SetupKey, Centre> factories;
   std::map<SetupKey, std::unique_ptr<model::ReducedModel>> models;
   /// Reduced models in order of last use: at most kKept stay (each holds a few b × b matrices, b a
   /// few dozen — the n-sized probe blocks live once in the factory; a diagnosis visits hundreds
@@ -132,12 +138,16 @@ struct Evaluator::Reduced {
   /// grew past 16 GB); a factory's reduced models go with it, and a centre met again is solved
   /// again (the same numbers: the solve is deterministic).
   std::deque<SetupKey> recent_factories;
-  /// Per factory, its centre's effects to the last digit (ExactKey): the factory's own full solve
-  /// is then an exact evaluation there (Evaluate takes it instead of solving again).
-  std::map<SetupKey, std::string> exact_keys;
 };
 
 namespace {
+// The key of a centre's factory: its effects as model::Describe names them.
+std::string CentreKey(const std::vector<model::Effect>& effects) {
+  std::string key;
+  for (const auto& e : effects) key += model::Describe(e) + ";";
+  return key;
+}
+
 // A set of effects to the last digit of every parameter (model::Describe rounds to 6 digits: it
 // names a centre, not a point).
 std::string ExactKey(const std::vector<model::Effect>& effects) {
@@ -214,24 +224,18 @@ Evaluation Evaluator::Evaluate(const std::vector<model::Effect>& effects) {
     out.error = e.what();
     return out;
   }
-  std::string centre_key, exact_key;
-  if (reduced_) {
-    for (const auto& e : effects) centre_key += model::Describe(e) + ";";
-    exact_key = ExactKey(effects);
-  }
+  const std::string centre_key = reduced_ ? CentreKey(effects) : "", exact_key = reduced_ ? ExactKey(effects) : "";
   return Compare([&](std::size_t s, const std::vector<model::PointMass>& sensors) {
     if (reduced_ && sensors.empty()) {
       // A reduced-model factory centred exactly here has solved this very model (without the
       // test's sensors, as here): its lowest modes are this solve's (a check of a set re-centred
       // at its values costs one full solve, not two).
-      const SetupKey key{s, centre_key};
-      const auto factory = reduced_models_->factories.find(key);
-      const auto made_at = reduced_models_->exact_keys.find(key);
-      if (factory != reduced_models_->factories.end() && made_at != reduced_models_->exact_keys.end() &&
-          made_at->second == exact_key) {
+      const auto centre = reduced_models_->factories.find({s, centre_key});
+      if (centre != reduced_models_->factories.end() && centre->second.exact_key == exact_key) {
+        const model::Solution& at_centre = centre->second.factory->BaseSolution();
         model::Solution sol;
-        sol.modes = factory->second->BaseSolution().modes;
-        sol.rigid_body_frequencies_hz = factory->second->BaseSolution().rigid_body_frequencies_hz;
+        sol.modes = at_centre.modes;
+        sol.rigid_body_frequencies_hz = at_centre.rigid_body_frequencies_hz;
         if (static_cast<int>(sol.modes.modes.size()) > max_modes_) sol.modes.modes.resize(static_cast<std::size_t>(max_modes_));
         return sol;
       }
@@ -250,8 +254,7 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
                                       const std::vector<model::Effect>& centre,
                                       const std::vector<model::Effect>& effects) {
   Reduced& r = *reduced_models_;
-  std::string centre_key;
-  for (const auto& e : centre) centre_key += model::Describe(e) + ";";
+  const std::string centre_key = CentreKey(centre);
   model::Model changed;
   try {
     changed = r.skeleton;
@@ -275,15 +278,15 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
     so.setup = setups_[s].name;
     so.max_modes = max_modes_;
     so.sparse_threshold = options_.reduced_model_min_dofs;
-    auto& factory = r.factories[{s, centre_key}];
-    if (!factory) {
+    Reduced::Centre& made = r.factories[{s, centre_key}];
+    if (!made.factory) {
       model::Model centred = base_;
       for (const auto& e : centre) centred = model::ApplyEffect(centred, e);
       model::ReducedModelOptions ro;
       ro.modes = max_modes_ + 10;
       ro.enriched_modes = std::min(max_modes_, test_modes + 4);
-      factory = std::make_unique<model::ReducedModelFactory>(centred, so, ro);
-      r.exact_keys[{s, centre_key}] = ExactKey(centre);
+      made.factory = std::make_unique<model::ReducedModelFactory>(centred, so, ro);
+      made.exact_key = ExactKey(centre);
       ++solves_;
     }
     if (!centre_key.empty())
@@ -294,11 +297,10 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
                  std::erase_if(r.models, [&](const auto& entry) { return of_old(entry.first); });
                  std::erase_if(r.recent, of_old);
                  r.factories.erase(old);
-                 r.exact_keys.erase(old);
                });
     const SetupKey model_key{s, centre_key + "|" + key};
     auto& reduced = r.models[model_key];
-    if (!reduced) reduced = factory->Make(probes);
+    if (!reduced) reduced = made.factory->Make(probes);
     MarkUsed(&r.recent, model_key, Reduced::kKept, [&](const SetupKey& old) { r.models.erase(old); });
     ++reduced_solves_;
     so.extra_masses = sensors;

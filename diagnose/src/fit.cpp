@@ -97,23 +97,32 @@ std::shared_ptr<const Evaluation> Problem::Cached(std::deque<std::pair<Key, std:
   return value;
 }
 
+Evaluation Problem::OnCentre(const std::vector<int>& set, const std::vector<double>& theta,
+                            const std::vector<int>& centre_set, const std::vector<double>* centre_theta) {
+  // Its probes are its atoms, each at a value that changes the model (linear effects give one
+  // direction whatever the value; the others near the centre): an atom of the centre's set from
+  // its value there, the others from their reference.
+  std::vector<std::vector<model::Effect>> probes;
+  std::string key;
+  for (size_t k = 0; k < set.size(); ++k) {
+    const Atom& a = (*atoms_)[set[k]];
+    const auto in_centre = std::find(centre_set.begin(), centre_set.end(), set[k]);
+    const double at = centre_theta && in_centre != centre_set.end()
+                          ? (*centre_theta)[static_cast<size_t>(in_centre - centre_set.begin())] - 0.5
+                          : (a.spec.absent_end == 0 ? -0.5 : 0.0);
+    probes.push_back({a.With(at)});
+    key += std::to_string(set[k]) + ",";
+  }
+  const std::vector<model::Effect> centred =
+      centre_theta ? Effects(centre_set, *centre_theta) : std::vector<model::Effect>{};
+  return evaluator_->EvaluateReduced(key, probes, centred, Effects(set, theta));
+}
+
 std::shared_ptr<const Evaluation> Problem::At(const std::vector<int>& set, const std::vector<double>& theta) {
   if (set.empty() || !evaluator_->UsesReducedModels()) return Exact(set, theta);
   return Cached(&cache_, {set, theta}, [&] {
-    // The reduced model of this set: its probes are its atoms, each at a value that changes the
-    // model (linear effects give one direction whatever the value; the others near the centre).
     const auto centre = centres_.find(set);
-    std::vector<std::vector<model::Effect>> probes;
-    std::string key;
-    for (size_t k = 0; k < set.size(); ++k) {
-      const Atom& a = (*atoms_)[set[k]];
-      const double at = centre != centres_.end() ? centre->second[k] - 0.5 : (a.spec.absent_end == 0 ? -0.5 : 0.0);
-      probes.push_back({a.With(at)});
-      key += std::to_string(set[k]) + ",";
-    }
-    const std::vector<model::Effect> centred =
-        centre != centres_.end() ? Effects(set, centre->second) : std::vector<model::Effect>{};
-    return evaluator_->EvaluateReduced(key, probes, centred, Effects(set, theta));
+    return centre != centres_.end() ? OnCentre(set, theta, set, &centre->second) : OnCentre(set, theta, {}, nullptr);
   });
 }
 
@@ -121,20 +130,7 @@ std::shared_ptr<const Evaluation> Problem::AtCentreOf(const std::vector<int>& ce
                                                       const std::vector<double>& theta) {
   const auto centre = centres_.find(centre_set);
   if (set.empty() || !evaluator_->UsesReducedModels() || centre == centres_.end()) return Exact(set, theta);
-  // Probes as At makes them: an atom of the centre's set from its value there, the others from
-  // their reference.
-  std::vector<std::vector<model::Effect>> probes;
-  std::string key;
-  for (size_t k = 0; k < set.size(); ++k) {
-    const Atom& a = (*atoms_)[set[k]];
-    const auto in_centre = std::find(centre_set.begin(), centre_set.end(), set[k]);
-    const double at = in_centre != centre_set.end() ? centre->second[static_cast<size_t>(in_centre - centre_set.begin())] - 0.5
-                                                    : (a.spec.absent_end == 0 ? -0.5 : 0.0);
-    probes.push_back({a.With(at)});
-    key += std::to_string(set[k]) + ",";
-  }
-  return std::make_shared<const Evaluation>(
-      evaluator_->EvaluateReduced(key, probes, Effects(centre_set, centre->second), Effects(set, theta)));
+  return std::make_shared<const Evaluation>(OnCentre(set, theta, centre_set, &centre->second));
 }
 
 std::shared_ptr<const Evaluation> Problem::Exact(const std::vector<int>& set, const std::vector<double>& theta) {

@@ -260,6 +260,10 @@ class Problem {
 
  private:
   using Key = std::pair<std::vector<int>, std::vector<double>>;
+  /// The set at θ through a reduced model centred at `centre_set` at *centre_theta (null: the
+  /// nominal centre).
+  Evaluation OnCentre(const std::vector<int>& set, const std::vector<double>& theta, const std::vector<int>& centre_set,
+                      const std::vector<double>* centre_theta);
   std::shared_ptr<const Evaluation> Cached(std::deque<std::pair<Key, std::shared_ptr<const Evaluation>>>* cache,
                                            const Key& key, const std::function<Evaluation()>& evaluate);
   Evaluator* evaluator_;
