@@ -194,9 +194,8 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
 // at the centre both lie more than `limit` behind, at the centre, whose full solve the reduced
 // model's factory has made already (Evaluator::Evaluate takes it; at 50 000 DOFs one full solve
 // fewer for each of the sets out of contention). Either way the reported score is an exact
-// evaluation at one point of the set, never better than the set's best; the reduced model (off by
-// tens of score units even 6 % from its centre on the 50 000-DOF frame) decides only whether the
-// second solve is made.
+// evaluation at one point of the set, never better than the set's best; the reduced model decides
+// only whether the second solve is made.
 detail::Fit AssessAtBest(detail::Problem* p, const std::vector<int>& set, const std::vector<double>& centre,
                          const detail::Fit& refit, double limit, const DiagnoseOptions& options) {
   if (refit.search_score > limit) {
