@@ -29,6 +29,7 @@ import subprocess
 import sys
 import time
 import tomllib
+import zlib
 
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree (CI runs it from there)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -437,7 +438,10 @@ def run_range(args):
                   + ("" if r["right"] or "error" in r else f" (rank 1 {r['rank1']['kind']}:{r['rank1']['target']})"),
                   flush=True)
     wall = time.monotonic() - start
-    with open(os.path.join(args.work, f"wall-{args.cases.replace(':', '-').replace(',', '_')}.json"), "w") as f:
+    tag = args.cases.replace(':', '-').replace(',', '_')
+    if len(tag) > 80:  # a long comma list: a name the file system takes (255 bytes at most), still unique
+        tag = f"{indices[0]}-{indices[-1]}-n{len(indices)}-{zlib.crc32(args.cases.encode()):08x}"
+    with open(os.path.join(args.work, f"wall-{tag}.json"), "w") as f:
         json.dump({"cases": args.cases, "count": len(indices), "jobs": args.jobs, "wall_seconds": wall}, f)
     print(f"{len(results)} cases in {wall:.0f} s with --jobs {args.jobs}")
     return results

@@ -196,6 +196,15 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
 // fewer for each of the sets out of contention). Either way the reported score is an exact
 // evaluation at one point of the set, never better than the set's best; the reduced model decides
 // only whether the second solve is made.
+// Whether a fit is more than `margin` (in −2 ln Z) behind the best judged by full solves, less the
+// reduced models' measured overstatement — by the search's evidence and by the ranking's both: the
+// ranking marginalises the model error, which brings poor fits closer together (a fit 1 200 behind
+// by the search's score can be 70 behind by the ranking's), so a set far behind by one may still
+// be in contention by the other.
+bool Behind(const detail::Fit& f, double overstated, double best, double best_ranked, double margin) {
+  return f.search_score - overstated > best + margin && f.score - overstated > best_ranked + margin;
+}
+
 detail::Fit AssessAtBest(detail::Problem* p, const std::vector<int>& set, const std::vector<double>& centre,
                          const detail::Fit& refit, double limit, const DiagnoseOptions& options) {
   if (refit.search_score > limit) {
@@ -210,20 +219,20 @@ detail::Fit AssessAtBest(detail::Problem* p, const std::vector<int>& set, const 
 // that part itself does not fit (benchmark case 43: a deck plate ×1.36 for one cross-beam zone
 // ×2.47, so the true pair was never fitted and three effects won at 92 %). So the best polished
 // fit of each size ≥ 2 (as the search's swap) has each effect replaced by each look-alike of the
-// same kind, screened for its own value with the rest held; those starts are ranked through the
-// reduced models, the 3·`polish_swaps` best judged by full solves and the `polish_swaps` best of
-// those re-fitted on a basis centred there. Single effects are left alone, as in the search: on a
-// 50 000-DOF model each full solve is seconds.
+// same kind, screened for its own value with the rest held; the 3·`polish_swaps` best starts are
+// ranked again on the leader's own reduced model and the `polish_swaps` best of those re-fitted
+// there, then on a basis centred where the fit went, and judged by full solves. Single effects are
+// left alone, as in the search: on a 50 000-DOF model each full solve is a second or more.
 void PolishSwaps(detail::Problem* p, std::vector<detail::Fit>* fits, const DiagnoseOptions& options) {
   if (options.polish_swaps == 0) return;
   std::map<size_t, detail::Fit> leaders;  // copies: *fits grows below
-  double best = detail::kInf;
+  double best = detail::kInf, best_ranked = detail::kInf;
   for (const detail::Fit& f : *fits)
-    if (f.ok && f.exact) best = std::min(best, f.search_score);
+    if (f.ok && f.exact) best = std::min(best, f.search_score), best_ranked = std::min(best_ranked, f.score);
   for (const detail::Fit& f : *fits) {
     // Swaps search near a set in contention: one more than `exact_margin` behind the best is not
     // worth the full solves (each seconds on a 50 000-DOF model).
-    if (!f.ok || !f.exact || f.atoms.size() < 2 || f.search_score > best + 2.0 * options.exact_margin) continue;
+    if (!f.ok || !f.exact || f.atoms.size() < 2 || Behind(f, 0.0, best, best_ranked, 2.0 * options.exact_margin)) continue;
     auto it = leaders.find(f.atoms.size());
     if (it == leaders.end() || f.search_score < it->second.search_score) leaders[f.atoms.size()] = f;
   }
@@ -263,7 +272,9 @@ void PolishSwaps(detail::Problem* p, std::vector<detail::Fit>* fits, const Diagn
     for (const auto& [objective, start] : starts) {
       if (!std::isfinite(objective)) continue;
       ReportProgress(options.progress, 0.97, "checking a look-alike with full solves");
-      p->Recentre(start.first, start.second);
+      // Fitted first on the leader's centre, where it was ranked (a full solve at the start
+      // itself bought no better direction: the fit is centred again where it goes, below).
+      p->RecentreOn(start.first, leader.atoms);
       detail::Fit refit = detail::FitSet(p, start.first, start.second, options);
       if (!refit.ok) continue;
       // Centred again where it went (a swapped factor can move from 0.2 to 0.9): the Laplace
@@ -344,11 +355,11 @@ void Polish(detail::Problem* p, std::vector<detail::Fit>* fits, const DiagnoseOp
   }
   // Full solves go where they can change the answer: a set whose reduced-model score, less the
   // most by which a reduced score has overstated a full one so far, is still more than
-  // `exact_margin` nats behind the best full score keeps its reduced-model misfit. Where the reduced
-  // models are good (the 12 000-DOF frame: within 3 nats) that spares the sets hundreds of nats
-  // behind; where they are poor the first check shows it (the allowance grows by as much) and the
-  // sets behind are checked as before.
-  double best_full = detail::kInf, overstated = 0.0;
+  // `exact_margin` nats behind the best full score — by the search's score and the ranking's both
+  // (Behind) — keeps its reduced-model misfit. Where the reduced models are good (the 12 000-DOF
+  // frame: within 3 nats) that spares the sets far behind; where they are poor the first check
+  // shows it (the allowance grows by as much) and the sets behind are checked as before.
+  double best_full = detail::kInf, best_full_ranked = detail::kInf, overstated = 0.0;
   const double margin = 2.0 * options.exact_margin;  // scores are −2 ln Z
   // A set re-centred at `start`, re-fitted there and judged by full solves (not ok: it failed).
   auto check = [&](const std::vector<int>& set, const std::vector<double>& start) {
@@ -361,12 +372,13 @@ void Polish(detail::Problem* p, std::vector<detail::Fit>* fits, const DiagnoseOp
   for (size_t i : order) {
     detail::Fit& f = (*fits)[i];
     if (f.exact) continue;  // checked already, from a larger set's values (below)
-    if (f.search_score - overstated > best_full + margin) continue;
+    if (Behind(f, overstated, best_full, best_full_ranked, margin)) continue;
     const double reduced_score = f.search_score;
     detail::Fit refit = check(f.atoms, f.theta);
     if (!refit.ok) continue;
     overstated = std::max(overstated, reduced_score - refit.search_score);
     best_full = std::min(best_full, refit.search_score);
+    best_full_ranked = std::min(best_full_ranked, refit.score);
     f = std::move(refit);
     BackwardFromChecked(p, fits, i, best_full + overstated + margin, check);
   }

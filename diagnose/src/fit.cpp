@@ -122,7 +122,8 @@ std::shared_ptr<const Evaluation> Problem::At(const std::vector<int>& set, const
   if (set.empty() || !evaluator_->UsesReducedModels()) return Exact(set, theta);
   return Cached(&cache_, {set, theta}, [&] {
     const auto centre = centres_.find(set);
-    return centre != centres_.end() ? OnCentre(set, theta, set, &centre->second) : OnCentre(set, theta, {}, nullptr);
+    return centre != centres_.end() ? OnCentre(set, theta, centre->second.set, &centre->second.theta)
+                                    : OnCentre(set, theta, {}, nullptr);
   });
 }
 
@@ -130,7 +131,7 @@ std::shared_ptr<const Evaluation> Problem::AtCentreOf(const std::vector<int>& ce
                                                       const std::vector<double>& theta) {
   const auto centre = centres_.find(centre_set);
   if (set.empty() || !evaluator_->UsesReducedModels() || centre == centres_.end()) return Exact(set, theta);
-  return std::make_shared<const Evaluation>(OnCentre(set, theta, centre_set, &centre->second));
+  return std::make_shared<const Evaluation>(OnCentre(set, theta, centre->second.set, &centre->second.theta));
 }
 
 std::shared_ptr<const Evaluation> Problem::Exact(const std::vector<int>& set, const std::vector<double>& theta) {
@@ -145,7 +146,14 @@ void Problem::Widen(int atom, int end) {
 }
 
 void Problem::Recentre(const std::vector<int>& set, const std::vector<double>& theta) {
-  centres_[set] = theta;
+  centres_[set] = {set, theta};
+  std::erase_if(cache_, [&](const auto& entry) { return entry.first.first == set; });
+}
+
+void Problem::RecentreOn(const std::vector<int>& set, const std::vector<int>& centre_set) {
+  const auto centre = centres_.find(centre_set);
+  if (centre != centres_.end()) centres_[set] = centre->second;  // std::map: `centre` stays valid
+  else centres_.erase(set);
   std::erase_if(cache_, [&](const auto& entry) { return entry.first.first == set; });
 }
 

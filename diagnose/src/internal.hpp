@@ -246,6 +246,10 @@ class Problem {
   std::shared_ptr<const Evaluation> Exact(const std::vector<int>& set, const std::vector<double>& theta);
   /// From now on, the set's reduced model is centred on θ (its basis from a full solve there).
   void Recentre(const std::vector<int>& set, const std::vector<double>& theta);
+  /// From now on, the set's reduced model is centred where `centre_set`'s is (that centre's full
+  /// solve and factorisation reused, the set's own probes added: no full solve while it is kept);
+  /// on the nominal centre when `centre_set` has none.
+  void RecentreOn(const std::vector<int>& set, const std::vector<int>& centre_set);
   bool Reduced() const { return evaluator_->UsesReducedModels(); }
   /// Widens one side of an atom's searched range (end −1: the lower, +1: the upper) 1000-fold
   /// (log parameters; a linear one by its range's width).
@@ -269,7 +273,12 @@ class Problem {
   Evaluator* evaluator_;
   std::vector<Atom>* atoms_;
   std::deque<std::pair<Key, std::shared_ptr<const Evaluation>>> cache_, exact_cache_;
-  std::map<std::vector<int>, std::vector<double>> centres_;
+  /// Where a set's reduced model is centred: a set (its own, or another's by RecentreOn) at θ.
+  struct Centre {
+    std::vector<int> set;
+    std::vector<double> theta;
+  };
+  std::map<std::vector<int>, Centre> centres_;
 };
 
 /// MAP refinement from `start` (Ceres: bounded, Huber loss, prior residuals, central numeric

@@ -120,7 +120,7 @@ TEST(PartsDiagnosis, SetsFarBehindSkipTheFullSolvesAndLeaveTheLeadersAlone) {
   ASSERT_GE(margin.candidates.size(), 3u);
   ASSERT_GE(all_checked.candidates.size(), 3u);
   // Rank 1 is the same full-solve fit either way (its score to the digit); its probability moves
-  // only by what the sets left unchecked carried (≤ e^-9 each against it).
+  // only by what the sets left unchecked carried (≤ e^-7 each against it: exact_margin).
   const Candidate& a = all_checked.candidates.front();
   const Candidate& b = margin.candidates.front();
   EXPECT_EQ(b.target, a.target);
@@ -132,7 +132,7 @@ TEST(PartsDiagnosis, SetsFarBehindSkipTheFullSolvesAndLeaveTheLeadersAlone) {
   for (const Candidate& c : margin.candidates)
     if (c.reduced_model) {
       ++unchecked;
-      EXPECT_LT(c.probability, 1e-4) << c.kind << " " << c.target;
+      EXPECT_LT(c.probability, std::exp(-DiagnoseOptions{}.exact_margin)) << c.kind << " " << c.target;
     }
   EXPECT_GT(unchecked, 0);
 }

@@ -145,13 +145,16 @@ struct DiagnoseOptions {
   int exact_candidates = 8;
   /// FE-sized models: of those (and their subsets), a set whose reduced-model score, less the most
   /// by which a reduced score has overstated a full one in the checks so far, is more than this many
-  /// nats (ln odds: e^-15 ≈ 3·10⁻⁷) behind the best full score keeps its reduced-model misfit
-  /// (`reduced_model`); the swaps below start only from sets within it of the best. Infinity: every
-  /// one of the `exact_candidates` and their subsets is checked, whatever its score.
-  double exact_margin = 15.0;
+  /// nats (ln odds: e^-7 ≈ 9·10⁻⁴, below the 0.1 % a probability is shown to) behind the best full
+  /// score — by the search's evidence and by the ranking's, which marginalises the model error —
+  /// keeps its reduced-model misfit (`reduced_model`); the swaps below start only from sets within
+  /// it of the best. Infinity: every one of the `exact_candidates` and their subsets is checked,
+  /// whatever its score. (15 until 2026-11-29: docs/diagnose.md.)
+  double exact_margin = 7.0;
   /// FE-sized models: after that, the best fit of each size ≥ 2 has each effect swapped for each
   /// look-alike of the same kind (screened for its own value), and the `polish_swaps` best of those
-  /// starts by full solves are re-fitted around them (docs/diagnose.md "FE-sized models"). 0: off.
+  /// starts are re-fitted around them and judged by full solves (docs/diagnose.md "FE-sized
+  /// models"). 0: off.
   int polish_swaps = 3;
   ProgressCallback progress;
 
