@@ -556,11 +556,13 @@ Solution detail::SolveKeepingFactor(const Model& input, const SolveOptions& opti
       std::vector<Eigen::Index> order(static_cast<std::size_t>(eigenvalues.size()));
       for (std::size_t j = 0; j < order.size(); ++j) order[j] = static_cast<Eigen::Index>(j);
       std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return eigenvalues(a) < eigenvalues(b); });
-      const Eigen::VectorXd values = eigenvalues;
-      const Eigen::MatrixXd columns = vectors;
-      for (std::size_t j = 0; j < order.size(); ++j) {
-        eigenvalues(static_cast<Eigen::Index>(j)) = values(order[j]);
-        vectors.col(static_cast<Eigen::Index>(j)) = columns.col(order[j]);
+      if (!std::is_sorted(order.begin(), order.end())) {  // the copies are n × modes: only when needed
+        const Eigen::VectorXd values = eigenvalues;
+        const Eigen::MatrixXd columns = vectors;
+        for (std::size_t j = 0; j < order.size(); ++j) {
+          eigenvalues(static_cast<Eigen::Index>(j)) = values(order[j]);
+          vectors.col(static_cast<Eigen::Index>(j)) = columns.col(order[j]);
+        }
       }
     }
     if (kept_factor) *kept_factor = std::move(factor);
