@@ -189,13 +189,6 @@ std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std
   return setups;
 }
 
-// A set re-centred at `centre` and re-fitted there (`refit`, on the new reduced model), judged by
-// full solves: at the re-fitted values — or, when the re-fit's reduced score and the exact score
-// at the centre both lie more than `limit` behind, at the centre, whose full solve the reduced
-// model's factory has made already (Evaluator::Evaluate takes it; at 50 000 DOFs one full solve
-// fewer for each of the sets out of contention). Either way the reported score is an exact
-// evaluation at one point of the set, never better than the set's best; the reduced model decides
-// only whether the second solve is made.
 // Whether a fit is more than `margin` (in −2 ln Z) behind the best judged by full solves, less the
 // reduced models' measured overstatement — by the search's evidence and by the ranking's both: the
 // ranking marginalises the model error, which brings poor fits closer together (a fit 1 200 behind
@@ -205,6 +198,13 @@ bool Behind(const detail::Fit& f, double overstated, double best, double best_ra
   return f.search_score - overstated > best + margin && f.score - overstated > best_ranked + margin;
 }
 
+// A set re-centred at `centre` and re-fitted there (`refit`, on the new reduced model), judged by
+// full solves: at the re-fitted values — or, when the re-fit's reduced score and the exact score
+// at the centre both lie more than `limit` behind, at the centre, whose full solve the reduced
+// model's factory has made already (Evaluator::Evaluate takes it; at 50 000 DOFs one full solve
+// fewer for each of the sets out of contention). Either way the reported score is an exact
+// evaluation at one point of the set, never better than the set's best; the reduced model decides
+// only whether the second solve is made.
 detail::Fit AssessAtBest(detail::Problem* p, const std::vector<int>& set, const std::vector<double>& centre,
                          const detail::Fit& refit, double limit, const DiagnoseOptions& options) {
   if (refit.search_score > limit) {

@@ -120,7 +120,8 @@ TEST(PartsDiagnosis, SetsFarBehindSkipTheFullSolvesAndLeaveTheLeadersAlone) {
   ASSERT_GE(margin.candidates.size(), 3u);
   ASSERT_GE(all_checked.candidates.size(), 3u);
   // Rank 1 is the same full-solve fit either way (its score to the digit); its probability moves
-  // only by what the sets left unchecked carried (≤ e^-7 each against it: exact_margin).
+  // only by what the sets left unchecked carried (exact_margin bounds each at e^-7 against it; on
+  // this frame they lie far below that).
   const Candidate& a = all_checked.candidates.front();
   const Candidate& b = margin.candidates.front();
   EXPECT_EQ(b.target, a.target);
@@ -132,7 +133,7 @@ TEST(PartsDiagnosis, SetsFarBehindSkipTheFullSolvesAndLeaveTheLeadersAlone) {
   for (const Candidate& c : margin.candidates)
     if (c.reduced_model) {
       ++unchecked;
-      EXPECT_LT(c.probability, std::exp(-DiagnoseOptions{}.exact_margin)) << c.kind << " " << c.target;
+      EXPECT_LT(c.probability, 1e-4) << c.kind << " " << c.target;
     }
   EXPECT_GT(unchecked, 0);
 }
