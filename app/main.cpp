@@ -1,7 +1,11 @@
 // ema: experimental modal analysis from the command line. See `ema --help` and ../shared/spec/cli.md.
+#include <unistd.h>
+
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <string>
+#include <strings.h>
 #include <vector>
 
 #include "cli.hpp"
@@ -36,9 +40,40 @@ void PrintUsage(std::ostream& out) {
   for (const auto& c : kCommands) out << "  " << c.name << std::string(11 - std::string(c.name).size(), ' ') << c.summary << "\n";
 }
 
+// OpenBLAS's name for the kernels it chose at load time (weak: null where the BLAS is another).
+extern "C" char* openblas_get_corename(void) __attribute__((weak));
+
+// OpenBLAS picks its kernels by CPU model when it loads and falls back to its generic "Prescott"
+// (SSE3) ones on a CPU newer than it knows: Debian 12's 0.3.21 on Emerald Rapids (model 207) runs
+// CHOLMOD's supernodal factorisation and block solves ~1.4× slower than with the AVX-512 kernels
+// the CPU has (one 220 941-DOF eigen-solution 81 → 59 s, docs/model.md). The choice can only be
+// made before the library loads (OPENBLAS_CORETYPE), so ema starts itself again with it set when
+// the fallback was taken and the CPU has the instructions of a kernel set OpenBLAS does know. A
+// user's own OPENBLAS_CORETYPE is left alone (and ends the loop: the second start has it set).
+void UseTheCpusBlasKernels(char** argv) {
+  if (!openblas_get_corename || std::getenv("OPENBLAS_CORETYPE")) return;
+  const char* core = openblas_get_corename();
+  if (!core || strcasecmp(core, "prescott") != 0) return;
+  __builtin_cpu_init();
+  const char* better = nullptr;
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512cd") &&
+      __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vl"))
+    better = "SkylakeX";
+  else if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+    better = "Haswell";
+  // The program's own path (not /proc/self/exe itself, which `ps` would then name "exe").
+  char self[4096];
+  const ssize_t length = readlink("/proc/self/exe", self, sizeof self - 1);
+  if (!better || length <= 0 || setenv("OPENBLAS_CORETYPE", better, 1) != 0) return;
+  self[length] = '\0';
+  execv(self, argv);
+  unsetenv("OPENBLAS_CORETYPE");  // not started again: go on with the kernels loaded
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  UseTheCpusBlasKernels(argv);
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty()) {
     PrintUsage(std::cerr);

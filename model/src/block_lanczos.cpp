@@ -208,9 +208,13 @@ BlockLanczosSummary LowestEigenpairs(const SparseFactor& factor, double sigma, c
     theta = es.eigenvalues();  // ascending: the largest θ are the lowest λ
     y = es.eigenvectors();
     const MatrixXd last = t.block(used, used - b, b, b) * y.bottomRows(b);
+    // From the lowest λ up: every pair until enough elastic ones (or all `wanted`) have converged.
     bool converged = true;
-    for (int i = used - 1; i >= used - nev && converged; --i)
+    const int needed = options.converged_elastic > 0 ? std::min(options.converged_elastic, nev) : nev;
+    for (int i = used - 1, counted = 0; i >= used - nev && converged && counted < needed; --i) {
       converged = last.col(i).norm() <= options.tolerance * std::abs(theta(i));
+      if (options.converged_elastic == 0 || sigma + 1.0 / theta(i) > options.rigid_limit) ++counted;
+    }
     if (converged) {
       out.converged = true;
       break;

@@ -25,6 +25,13 @@ struct BlockLanczosOptions {
   /// (Spectra's test, the same 1e-10: eigenvalues to ~1e-16, shapes to ~1e-10 of the gap).
   double tolerance = 1e-10;
   int max_block_solves = 1000;
+  /// The iteration ends when the lowest pairs have converged up to this many elastic ones (λ above
+  /// `rigid_limit`), the rigid-body pairs below them counted on top; 0: all `wanted` pairs. The
+  /// caller asks for room beyond what it keeps (six pairs for the rigid-body modes a model may
+  /// have): a clamped model has none, and converging six pairs it drops cost a fifth of a
+  /// 220 941-DOF solve's Lanczos (22.9 → 18.3 s). The pairs beyond are returned unconverged.
+  int converged_elastic = 0;
+  double rigid_limit = 0.0;  ///< λ at or below it is a rigid-body pair (with converged_elastic)
   unsigned seed = 20261129;  ///< the random start block: fixed, so every solve is repeatable
 
   bool IsValid(std::string* why) const {
@@ -33,6 +40,7 @@ struct BlockLanczosOptions {
     if (max_basis < 0) return *why = "max_basis must be >= 0", false;
     if (!(tolerance > 0.0)) return *why = "tolerance must be > 0", false;
     if (max_block_solves < 1) return *why = "max_block_solves must be >= 1", false;
+    if (converged_elastic < 0) return *why = "converged_elastic must be >= 0", false;
     return true;
   }
 };

@@ -18,13 +18,27 @@
 
 namespace ema::model::detail {
 
+#ifdef EMA_HAVE_CHOLMOD
+/// CHOLMOD's supernodal LLᵀ, analysed with the fill-reducing ordering of an earlier matrix of the
+/// same sparsity pattern where there was one: METIS's nested dissection is seconds at 220 941 DOFs
+/// (CHOLMOD tries it and AMD and keeps the better), and the diagnosis factorises K − σM of one
+/// pattern at every centre it checks — part factors, masses at nodes and the shift change values,
+/// not the pattern. The ordering is kept per pattern (OrderingCache in sparse_factor.cpp); any
+/// ordering gives the exact factorisation, the same one gives the same factor to the last bit.
+class SupernodalLlt : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+ public:
+  /// Analyses and factorises `a` (symmetric, lower triangle read).
+  void Factorise(const Eigen::SparseMatrix<double>& a);
+};
+#endif
+
 class SparseFactor {
  public:
   /// Factorises `a` (symmetric, full storage); false when neither factorisation succeeds.
   bool Compute(const Eigen::SparseMatrix<double>& a) {
 #ifdef EMA_HAVE_CHOLMOD
-    cholmod_ = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>>();
-    cholmod_->compute(a);
+    cholmod_ = std::make_unique<SupernodalLlt>();
+    cholmod_->Factorise(a);
     if (cholmod_->info() == Eigen::Success) return ldlt_.reset(), true;
     cholmod_.reset();
 #endif
@@ -52,7 +66,7 @@ class SparseFactor {
 
  private:
 #ifdef EMA_HAVE_CHOLMOD
-  std::unique_ptr<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>> cholmod_;
+  std::unique_ptr<SupernodalLlt> cholmod_;
 #endif
   std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> ldlt_;
 };
@@ -60,6 +74,8 @@ class SparseFactor {
 /// model::Solve, keeping the sparse path's factorisation of K − σM (σ: solve.cpp's shift) in
 /// *kept_factor when it is not null — the reduced models of the diagnosis solve with the same
 /// matrix, and at 220 941 DOFs a factorisation is seconds and gigabytes. Null after the dense path.
-Solution SolveKeepingFactor(const Model& input, const SolveOptions& options, std::unique_ptr<SparseFactor>* kept_factor);
+/// The assembled system (Assemble(input, options)) goes to *kept_system when it is not null.
+Solution SolveKeepingFactor(const Model& input, const SolveOptions& options, std::unique_ptr<SparseFactor>* kept_factor,
+                            System* kept_system = nullptr);
 
 }  // namespace ema::model::detail

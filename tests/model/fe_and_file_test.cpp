@@ -165,9 +165,12 @@ TEST(FiniteElement, FineMeshLowestModesConvergeInOneLanczosPass) {
   ASSERT_EQ(near.modes.modes.size(), 30u);
   ASSERT_EQ(far.modes.modes.size(), 30u);
   // nev = 36 (30 + room for 6 rigid-body modes) by block Lanczos in blocks of 12 (16 002 DOFs):
-  // 12 block solves, 144 columns (Spectra's single-vector Lanczos, until 2026-11-29: 74 solves).
+  // 11 block solves, 132 columns, the 30 kept pairs converged (Spectra's single-vector Lanczos,
+  // until 2026-11-29: 74 solves; the room's pairs converged too: 144 columns). The far shift: 228
+  // columns — over twice as many with the basis of three times the pairs, which restarted more;
+  // the basis of five times (since 2026-11-29, docs/model.md) absorbs part of that.
   EXPECT_LE(near.shift_invert_solves, 144);
-  EXPECT_GT(far.shift_invert_solves, 2 * near.shift_invert_solves) << "the far shift should need restarts";
+  EXPECT_GT(far.shift_invert_solves, 3 * near.shift_invert_solves / 2) << "the far shift should need more solves";
   // The mesh's own round-off (1e-16 of the scale) bounds how far the two may differ.
   const double round_off = 1e-15 * model.fe.stiffness.diagonal().sum() / model.fe.mass.diagonal().sum();
   for (int i = 0; i < 30; ++i) {

@@ -97,6 +97,25 @@ TEST(SparseEigen, BlockLanczosFindsSixRigidBodyModesAndSixfoldEigenvalues) {
   EXPECT_EQ(sol.rigid_body_frequencies_hz.size(), 6u);
 }
 
+// The supernodal factorisation keeps the ordering of each sparsity pattern it met
+// (model/src/sparse_factor.cpp): the same chain solved again with every spring twice as stiff —
+// the same pattern, other values — is analysed with the first one's ordering and must give its own
+// spectrum, twice the first, to the same tolerance; and the first model solved again, the same
+// modes to the last bit (the same ordering, the same factor).
+TEST(SparseEigen, ASecondMatrixOfTheSamePatternReusesTheOrderingExactly) {
+  const int n = 1200;
+  std::vector<double> expected, doubled;
+  for (int k = 1; k <= 8; ++k) expected.push_back(ChainEigenvalue(n, k)), doubled.push_back(2.0 * ChainEigenvalue(n, k));
+  const Model first = FixedChains(n, 1);
+  Model stiffer = first;
+  stiffer.fe.stiffness *= 2.0;
+  const Solution a = ExpectSpectrum(first, {}, 8, expected, 1e-10);
+  ExpectSpectrum(stiffer, {}, 8, doubled, 1e-10);
+  const Solution again = ExpectSpectrum(first, {}, 8, expected, 1e-10);
+  ASSERT_EQ(a.full_shapes.cols(), again.full_shapes.cols());
+  EXPECT_EQ((a.full_shapes - again.full_shapes).cwiseAbs().maxCoeff(), 0.0);
+}
+
 // 150 DOFs: below four bases of the block Lanczos, Spectra's single-vector Lanczos serves — the same
 // spectrum to the same tolerance.
 TEST(SparseEigen, SmallSparseModelsKeepSpectrasLanczos) {
