@@ -89,16 +89,18 @@ void CheckTests(const model::Model& base, const std::vector<SetupModes>& tests, 
   }
 }
 
-// Baseline solve per setup: DOF matching is done once (the observed DOFs do not move); each
-// test frequency's σ is its measured spread or the floor.
+// Baseline solve per setup (kept in *nominal for the evaluator: the one full solve of the base):
+// DOF matching is done once (the observed DOFs do not move); each test frequency's σ is its
+// measured spread or the floor.
 std::vector<detail::SetupData> PrepareSetups(const model::Model& base, const std::vector<SetupModes>& tests,
-                                             const DiagnoseOptions& options, int max_modes) {
+                                             const DiagnoseOptions& options, int max_modes,
+                                             std::vector<detail::NominalSolve>* nominal) {
+  int test_modes = 0;
+  for (const SetupModes& t : tests) test_modes += static_cast<int>(t.modes.modes.size());
   std::vector<detail::SetupData> setups;
   for (const SetupModes& t : tests) {
-    model::SolveOptions so;
-    so.setup = t.setup;
-    so.max_modes = max_modes;
-    const model::Solution sol = model::Solve(base, so);
+    nominal->push_back(detail::SolveNominal(base, t.setup, options, max_modes, test_modes));
+    const model::Solution& sol = nominal->back().solution;
     detail::SetupData s;
     s.name = t.setup;
     s.match = correlation::MatchDofs(t.modes, sol.modes, options.dofs);
@@ -198,18 +200,27 @@ bool Behind(const detail::Fit& f, double overstated, double best, double best_ra
   return f.search_score - overstated > best + margin && f.score - overstated > best_ranked + margin;
 }
 
+// How far (in nats of the MAP objective, by the reduced model) a re-fit may improve on its centre
+// for the centre's exact evaluation to stand for it: a score (−2 ln Z) then changes by at most
+// 0.02 and a probability by about 1 %. A check is centred on the values the search fitted, and
+// the re-fit on that basis moves them little (a loosened joint 0.302406 → 0.3025, 10⁻⁴ σ² of
+// objective): one full solve instead of two, a minute at 220 941 DOFs (docs/diagnose.md).
+constexpr double kCentreStandsNats = 0.01;
+
 // A set re-centred at `centre` and re-fitted there (`refit`, on the new reduced model), judged by
-// full solves: at the re-fitted values — or, when the re-fit's reduced score and the exact score
-// at the centre both lie more than `limit` behind, at the centre, whose full solve the reduced
-// model's factory has made already (Evaluator::Evaluate takes it; at 50 000 DOFs one full solve
-// fewer for each of the sets out of contention). Either way the reported score is an exact
-// evaluation at one point of the set, never better than the set's best; the reduced model decides
-// only whether the second solve is made.
+// full solves: at the re-fitted values — or at the centre, whose full solve the reduced model's
+// factory has made already (Evaluator::Evaluate takes it), when the reduced model puts the centre
+// within kCentreStandsNats of the re-fit, or when the re-fit's reduced score and the exact score
+// at the centre both lie more than `limit` behind (out of contention: at 50 000 DOFs one full
+// solve fewer for each such set). Either way the reported score is an exact evaluation at one
+// point of the set, never better than the set's best; the reduced model decides only whether the
+// second solve is made.
 detail::Fit AssessAtBest(detail::Problem* p, const std::vector<int>& set, const std::vector<double>& centre,
                          const detail::Fit& refit, double limit, const DiagnoseOptions& options) {
-  if (refit.search_score > limit) {
+  const bool centre_stands = refit.atoms == set && p->Objective(set, centre) - p->Objective(set, refit.theta) <= kCentreStandsNats;
+  if (centre_stands || refit.search_score > limit) {
     detail::Fit at_centre = detail::Assess(p, set, centre, options, true);
-    if (at_centre.ok && at_centre.search_score > limit) return at_centre;
+    if (at_centre.ok && (centre_stands || at_centre.search_score > limit)) return at_centre;
   }
   return detail::Assess(p, refit.atoms, refit.theta, options, true);
 }
@@ -424,7 +435,9 @@ Diagnosis Diagnose(const model::Model& input_model, const std::vector<SetupModes
   for (const SetupModes& t : tests) max_test_modes = std::max<int>(max_test_modes, t.modes.modes.size());
   const int max_modes = base.fe.Empty() ? 0 : std::max(20, 2 * max_test_modes + 4);
 
-  detail::Evaluator evaluator(base, PrepareSetups(base, tests, options, max_modes), options, max_modes);
+  std::vector<detail::NominalSolve> nominal;
+  std::vector<detail::SetupData> setups = PrepareSetups(base, tests, options, max_modes, &nominal);
+  detail::Evaluator evaluator(base, std::move(setups), options, max_modes, std::move(nominal));
   Diagnosis result;
   result.residual_count = evaluator.ResidualCount();
   result.test_mode_count = evaluator.TestModeCount();

@@ -165,8 +165,52 @@ std::string ExactKey(const std::vector<model::Effect>& effects) {
 }
 }  // namespace
 
+namespace {
+// A reduced-model factory centred on `centred` (a full solve and a factorisation): its basis holds
+// ten modes more than an evaluation compares, enriched by the static responses of the lowest.
+std::unique_ptr<model::ReducedModelFactory> MakeFactory(const model::Model& centred, const model::SolveOptions& so,
+                                                        int max_modes, int test_modes) {
+  model::ReducedModelOptions ro;
+  ro.modes = max_modes + 10;
+  ro.enriched_modes = std::min(max_modes, test_modes + 4);
+  return std::make_unique<model::ReducedModelFactory>(centred, so, ro);
+}
+
+// What Evaluate hands the solver for setup `setup` (with no sensors).
+model::SolveOptions EvaluationOptions(const std::string& setup, const DiagnoseOptions& options, int max_modes,
+                                      bool reduced) {
+  model::SolveOptions so;
+  so.setup = setup;
+  so.max_modes = max_modes;
+  if (reduced) so.sparse_threshold = options.reduced_model_min_dofs;  // FE-sized: the lowest modes by shift-invert
+  return so;
+}
+}  // namespace
+
+bool SearchesReduced(const model::Model& base, const DiagnoseOptions& options) {
+  const int dofs = 6 * static_cast<int>(base.bodies.size()) + base.fe.Size();
+  return options.reduced_model_min_dofs > 0 && dofs >= options.reduced_model_min_dofs;
+}
+
+NominalSolve SolveNominal(const model::Model& base, const std::string& setup, const DiagnoseOptions& options,
+                          int max_modes, int test_modes) {
+  NominalSolve out;
+  const bool reduced = SearchesReduced(base, options);
+  const model::SolveOptions so = EvaluationOptions(setup, options, max_modes, reduced);
+  if (!reduced) {
+    out.solution = model::Solve(base, so);
+    return out;
+  }
+  // The factory solves with more modes than an evaluation compares: the lowest `max_modes` of its
+  // solution are the evaluation's (as Evaluate takes them at any centre it has a factory for).
+  out.factory = MakeFactory(base, so, max_modes, test_modes);
+  out.solution = out.factory->BaseSolution();
+  if (static_cast<int>(out.solution.modes.modes.size()) > max_modes) out.solution.modes.modes.resize(static_cast<std::size_t>(max_modes));
+  return out;
+}
+
 Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options,
-                     int max_modes)
+                     int max_modes, std::vector<NominalSolve> nominal)
     : base_(base), setups_(std::move(setups)), options_(options), max_modes_(max_modes) {
   const bool per_dof = options.shape_residual == ShapeResidual::kPerDof;
   block_start_.push_back(0);
@@ -198,8 +242,7 @@ Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, co
     if (sd > 1e-9)
       for (Eigen::Index i = 0; i < log_hz.size(); ++i) model_error_trend_(block_start_[i]) = (log_hz(i) - mean) / sd;
   }
-  int dofs = 6 * static_cast<int>(base.bodies.size()) + base.fe.Size();
-  reduced_ = options.reduced_model_min_dofs > 0 && dofs >= options.reduced_model_min_dofs;
+  reduced_ = SearchesReduced(base, options);
   if (reduced_) {
     reduced_models_ = std::make_unique<Reduced>();
     reduced_models_->skeleton = base;
@@ -209,6 +252,19 @@ Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, co
     // copies the skeleton, and a 50 000-DOF map is no small copy.
     reduced_models_->skeleton.fe.dofs.clear();
     reduced_models_->skeleton.fe.node_positions.clear();
+  }
+  // The base solved before the evaluator existed (the setups' DOF matching): a factory becomes the
+  // nominal centre's, a plain solution the baseline's. Full solves of this diagnosis all the same.
+  for (std::size_t s = 0; s < nominal.size() && s < setups_.size(); ++s) {
+    ++solves_;
+    if (reduced_ && nominal[s].factory) {
+      Reduced::Centre& centre = reduced_models_->factories[{s, ""}];
+      centre.factory = std::move(nominal[s].factory);
+      centre.exact_key = "";
+    } else if (!reduced_ && !nominal[s].factory) {
+      nominal_.resize(setups_.size());
+      nominal_[s] = std::move(nominal[s].solution);
+    }
   }
 }
 
@@ -240,11 +296,10 @@ Evaluation Evaluator::Evaluate(const std::vector<model::Effect>& effects) {
         return sol;
       }
     }
-    model::SolveOptions so;
-    so.setup = setups_[s].name;
-    so.max_modes = max_modes_;
+    if (effects.empty() && sensors.empty() && s < nominal_.size() && !nominal_[s].modes.modes.empty())
+      return nominal_[s];  // the base, solved once (SolveNominal)
+    model::SolveOptions so = EvaluationOptions(setups_[s].name, options_, max_modes_, reduced_);
     so.extra_masses = sensors;
-    if (reduced_) so.sparse_threshold = options_.reduced_model_min_dofs;  // FE-sized: the lowest modes by shift-invert
     ++solves_;
     return model::Solve(m, so);
   });
@@ -282,10 +337,7 @@ Evaluation Evaluator::EvaluateReduced(const std::string& key, const std::vector<
     if (!made.factory) {
       model::Model centred = base_;
       for (const auto& e : centre) centred = model::ApplyEffect(centred, e);
-      model::ReducedModelOptions ro;
-      ro.modes = max_modes_ + 10;
-      ro.enriched_modes = std::min(max_modes_, test_modes + 4);
-      made.factory = std::make_unique<model::ReducedModelFactory>(centred, so, ro);
+      made.factory = MakeFactory(centred, so, max_modes_, test_modes);
       made.exact_key = ExactKey(centre);
       ++solves_;
     }

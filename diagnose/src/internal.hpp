@@ -14,6 +14,7 @@
 #include "ema/correlation/dof_match.hpp"
 #include "ema/diagnose/diagnose.hpp"
 #include "ema/model/effects.hpp"
+#include "ema/model/reduced.hpp"
 #include "ema/model/solve.hpp"
 
 namespace ema::diagnose::detail {
@@ -126,9 +127,29 @@ struct Evaluation {
   int paired = 0;
 };
 
+/// The base's own solution for one setup (no effects, no sensors), solved once for the whole
+/// diagnosis: the setups' DOF matching, the baseline's evaluation and — on an FE-sized model — the
+/// search's reduced models at the nominal centre all take it. There `factory` holds it (the
+/// reduced-model factory centred on the base: its full solve and factorisation), else `solution`.
+struct NominalSolve {
+  model::Solution solution;
+  std::unique_ptr<model::ReducedModelFactory> factory;
+};
+
+/// Whether the diagnosis of `base` searches through reduced models (it is FE-sized:
+/// DiagnoseOptions::reduced_model_min_dofs).
+bool SearchesReduced(const model::Model& base, const DiagnoseOptions& options);
+
+/// `base` solved for `setup` as the Evaluator solves it, with `max_modes` modes; through a
+/// reduced-model factory when `SearchesReduced` (its basis enriched for `test_modes` test modes).
+NominalSolve SolveNominal(const model::Model& base, const std::string& setup, const DiagnoseOptions& options,
+                          int max_modes, int test_modes);
+
 class Evaluator {
  public:
-  Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options, int max_modes);
+  /// `nominal`: per setup, the base solved by SolveNominal (or empty: solved when first needed).
+  Evaluator(const model::Model& base, std::vector<SetupData> setups, const DiagnoseOptions& options, int max_modes,
+            std::vector<NominalSolve> nominal = {});
   ~Evaluator();
   int ResidualCount() const { return residual_count_; }
   /// Where each test mode's block of residuals starts (one more entry: the end): its frequency
@@ -175,6 +196,8 @@ class Evaluator {
   int reduced_solves_ = 0;
   bool reduced_ = false;
   std::unique_ptr<Reduced> reduced_models_;
+  /// Per setup, the base's solution (without reduced models; with them the nominal factory holds it).
+  std::vector<model::Solution> nominal_;
 };
 
 /// Modal phase collinearity of a complex shape (1 = a real mode up to one phase, 0 = circular).
