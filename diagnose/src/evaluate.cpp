@@ -163,9 +163,7 @@ std::string ExactKey(const std::vector<model::Effect>& effects) {
   }
   return key;
 }
-}  // namespace
 
-namespace {
 // A reduced-model factory centred on `centred` (a full solve and a factorisation): its basis holds
 // ten modes more than an evaluation compares, enriched by the static responses of the lowest.
 std::unique_ptr<model::ReducedModelFactory> MakeFactory(const model::Model& centred, const model::SolveOptions& so,
@@ -204,7 +202,8 @@ NominalSolve SolveNominal(const model::Model& base, const std::string& setup, co
   // The factory solves with more modes than an evaluation compares: the lowest `max_modes` of its
   // solution are the evaluation's (as Evaluate takes them at any centre it has a factory for).
   out.factory = MakeFactory(base, so, max_modes, test_modes);
-  out.solution = out.factory->BaseSolution();
+  // Its modes only (the DOF matching's input): the factory keeps the full shapes, n × modes.
+  out.solution.modes = out.factory->BaseSolution().modes;
   if (static_cast<int>(out.solution.modes.modes.size()) > max_modes) out.solution.modes.modes.resize(static_cast<std::size_t>(max_modes));
   return out;
 }

@@ -130,7 +130,8 @@ struct Evaluation {
 /// The base's own solution for one setup (no effects, no sensors), solved once for the whole
 /// diagnosis: the setups' DOF matching, the baseline's evaluation and — on an FE-sized model — the
 /// search's reduced models at the nominal centre all take it. There `factory` holds it (the
-/// reduced-model factory centred on the base: its full solve and factorisation), else `solution`.
+/// reduced-model factory centred on the base: its full solve and factorisation) and `solution`
+/// only its modes; else `solution` is the whole solve.
 struct NominalSolve {
   model::Solution solution;
   std::unique_ptr<model::ReducedModelFactory> factory;
