@@ -207,20 +207,34 @@ bool Behind(const detail::Fit& f, double overstated, double best, double best_ra
 // objective): one full solve instead of two, a minute at 220 941 DOFs (docs/diagnose.md).
 constexpr double kCentreStandsNats = 0.01;
 
+// How much a reported probability may move because a set is scored at its centre instead of at its
+// re-fit: half a percentage point. A set's weight is exp(−(score − best)/2) of the best's, so
+// scoring it at a worse point changes its probability, and the others' by as much in all, by at
+// most the weight it loses — e^(−6) of the best's for one 12 behind even if the re-fit would have
+// gained 5 nats (a look-alike pair on the 220 941-DOF bar: a full solve of 40 s for 0.2 %).
+constexpr double kProbabilityTolerance = 0.005;
+
 // A set re-centred at `centre` and re-fitted there (`refit`, on the new reduced model), judged by
 // full solves: at the re-fitted values — or at the centre, whose full solve the reduced model's
 // factory has made already (Evaluator::Evaluate takes it), when the reduced model puts the centre
-// within kCentreStandsNats of the re-fit, or when the re-fit's reduced score and the exact score
-// at the centre both lie more than `limit` behind (out of contention: at 50 000 DOFs one full
-// solve fewer for each such set). Either way the reported score is an exact evaluation at one
-// point of the set, never better than the set's best; the reduced model decides only whether the
-// second solve is made.
+// within kCentreStandsNats of the re-fit; when the re-fit's reduced score and the exact score at
+// the centre both lie more than `limit` behind (out of contention: at 50 000 DOFs one full solve
+// fewer for each such set); or when the re-fit's weight by its reduced score, exp(−(score −
+// `best_ranked`)/2), exceeds the centre's exact one by no more than kProbabilityTolerance (a set
+// far enough behind that the best its re-fit could do moves no probability by more than that).
+// The centre's exact evaluation is the factory's solve, made already — where the test's sensors
+// are on the model it is one more solve, which a set near the top then pays for nothing.
+// Either way the reported score is an exact evaluation at one point of the set, never better than
+// the set's best; the reduced model decides only whether the second solve is made.
 detail::Fit AssessAtBest(detail::Problem* p, const std::vector<int>& set, const std::vector<double>& centre,
-                         const detail::Fit& refit, double limit, const DiagnoseOptions& options) {
+                         const detail::Fit& refit, double limit, double best_ranked, const DiagnoseOptions& options) {
   const bool centre_stands = refit.atoms == set && p->Objective(set, centre) - p->Objective(set, refit.theta) <= kCentreStandsNats;
-  if (centre_stands || refit.search_score > limit) {
+  const bool weights_known = refit.atoms == set && std::isfinite(best_ranked) && std::isfinite(refit.score);
+  if (centre_stands || refit.search_score > limit || weights_known) {
     detail::Fit at_centre = detail::Assess(p, set, centre, options, true);
-    if (at_centre.ok && (centre_stands || at_centre.search_score > limit)) return at_centre;
+    auto weight = [&](double score) { return std::exp(-0.5 * (score - best_ranked)); };
+    const bool little_to_gain = weights_known && weight(refit.score) - weight(at_centre.score) <= kProbabilityTolerance;
+    if (at_centre.ok && (centre_stands || at_centre.search_score > limit || little_to_gain)) return at_centre;
   }
   return detail::Assess(p, refit.atoms, refit.theta, options, true);
 }
@@ -288,6 +302,12 @@ void PolishSwaps(detail::Problem* p, std::vector<detail::Fit>* fits, const Diagn
       p->RecentreOn(start.first, leader.atoms);
       detail::Fit refit = detail::FitSet(p, start.first, start.second, options);
       if (!refit.ok) continue;
+      // A swap can land on a set the polish judged by full solves already (the 220 941-DOF bar:
+      // J3+J5, re-found 0.002 better for two solves of 40 s). Only a better fit than that one's,
+      // compared on this same reduced model, is worth the solves.
+      auto judged = std::find_if(fits->begin(), fits->end(),
+                                 [&](const detail::Fit& f) { return f.ok && f.exact && f.atoms == refit.atoms; });
+      if (judged != fits->end() && refit.objective >= p->Objective(judged->atoms, judged->theta) - kCentreStandsNats) continue;
       // Centred again where it went (a swapped factor can move from 0.2 to 0.9): the Laplace
       // Hessian comes from the reduced model's Jacobian, and one centred at the start was off by
       // e^12 in det H there (benchmark case 159: a spurious third effect at "99.9 %").
@@ -295,7 +315,7 @@ void PolishSwaps(detail::Problem* p, std::vector<detail::Fit>* fits, const Diagn
       p->Recentre(refit.atoms, centre);
       refit = detail::FitSet(p, refit.atoms, centre, options);
       if (!refit.ok) continue;
-      refit = AssessAtBest(p, refit.atoms, centre, refit, best + 2.0 * options.exact_margin, options);
+      refit = AssessAtBest(p, refit.atoms, centre, refit, best + 2.0 * options.exact_margin, best_ranked, options);
       if (!refit.ok) continue;
       auto same = std::find_if(fits->begin(), fits->end(), [&](const detail::Fit& f) { return f.atoms == refit.atoms; });
       if (same == fits->end()) fits->push_back(std::move(refit));
@@ -378,7 +398,7 @@ void Polish(detail::Problem* p, std::vector<detail::Fit>* fits, const DiagnoseOp
     p->Recentre(set, start);
     detail::Fit refit = detail::FitSet(p, set, start, options);
     if (!refit.ok) return refit;
-    return AssessAtBest(p, set, start, refit, best_full + margin, options);
+    return AssessAtBest(p, set, start, refit, best_full + margin, best_full_ranked, options);
   };
   for (size_t i : order) {
     detail::Fit& f = (*fits)[i];
