@@ -72,12 +72,13 @@ void UseTheCpusBlasKernels(char** argv) {
 }
 
 // The FE numerics allocate and free blocks of tens of MB to GBs over and over: 30 vectors of a
-// 220 941-DOF model are 53 MB, a factorisation several GB. glibc serves every block above its
-// mmap threshold (at most 32 MB) by a fresh mmap and unmaps it on free, so each reuse has the kernel
-// zero the pages again — 31 M page faults in one diagnosis of that model, the kernel's page
-// clearing 6 % of its CPU. With mmap off and the heap never trimmed, freed blocks are reused: 4.1 M
-// page faults, 9 min 40 s → 7 min 10 s on one tree, peak 14.9 → 16.3 GB (docs/performance.md). The process ends when its command does, so the memory kept is never
-// wanted back; the Python module, a long-lived process, keeps glibc's defaults.
+// 220 941-DOF model are 53 MB, a factorisation several GB. glibc serves every block above its mmap
+// threshold (at most 32 MB) by a fresh mmap and unmaps it on free, so each reuse has the kernel zero
+// the pages again — 31 M page faults in one diagnosis of that model, the kernel's page clearing 6 %
+// of its CPU. With mmap off and the heap never trimmed, freed blocks are reused: 4.1 M page faults,
+// 9 min 40 s → 7 min 10 s on an otherwise equal tree, peak 14.9 → 16.3 GB (docs/model.md). The
+// process ends when its command does, so the memory kept is never wanted back; the Python module,
+// a long-lived process, keeps glibc's defaults.
 void ReuseFreedMemory() {
   mallopt(M_MMAP_MAX, 0);
   mallopt(M_TRIM_THRESHOLD, -1);  // read as the largest size_t: never trim

@@ -228,8 +228,9 @@ constexpr double kProbabilityTolerance = 0.005;
 // the set's best; the reduced model decides only whether the second solve is made.
 detail::Fit AssessAtBest(detail::Problem* p, const std::vector<int>& set, const std::vector<double>& centre,
                          const detail::Fit& refit, double limit, double best_ranked, const DiagnoseOptions& options) {
-  const bool centre_stands = refit.atoms == set && p->Objective(set, centre) - p->Objective(set, refit.theta) <= kCentreStandsNats;
-  const bool weights_known = refit.atoms == set && std::isfinite(best_ranked) && std::isfinite(refit.score);
+  const bool same_set = refit.atoms == set;
+  const bool centre_stands = same_set && p->Objective(set, centre) - p->Objective(set, refit.theta) <= kCentreStandsNats;
+  const bool weights_known = same_set && std::isfinite(best_ranked) && std::isfinite(refit.score);
   if (centre_stands || refit.search_score > limit || weights_known) {
     detail::Fit at_centre = detail::Assess(p, set, centre, options, true);
     auto weight = [&](double score) { return std::exp(-0.5 * (score - best_ranked)); };
