@@ -306,7 +306,7 @@ def build_fe(rng, files):
                  f"{{ linear = {{ k = {fmt(k)} }} }}", k, a_node=node)
     for i in range(1, nodes + 1):
         m.point(100 + i, node=i)
-    m.form = {"assemble": assemble, "elements": elements, "nodes": nodes, "mass_per_length": mpl}
+    m.form = {"assemble": assemble, "elements": elements, "nodes": nodes, "mass_per_length": mpl, "length": length}
     return m, [None]
 
 
@@ -599,7 +599,8 @@ def make_case(index, seed, attempt=0, family=None):
         files["truth-fe/K.mtx"] = write_mtx(2 * f["nodes"], kk)
         files["truth-fe/M.mtx"] = write_mtx(2 * f["nodes"], mm)
         form_error = {"stiffness_scatter": scatter, "mass_scatter": 0.5 * scatter,
-                      "nonstructural_mass_share": extra / f["mass_per_length"]}
+                      "nonstructural_mass_share": extra / f["mass_per_length"],
+                      "nonstructural_mass_kg": extra * f["length"]}
     fe_mass = getattr(m, "fe_mass", 0.0)
     if family in ("fe", FORM_FAMILY):
         # The FE beam's mass from its M matrix: translational share (consistent matrix ~ whole).

@@ -218,59 +218,98 @@ def tables(rows):
 BEGIN_FORM = "<!-- BEGIN GENERATED: bench.py gather, model-form family -->"
 
 
-def visible_right(r):
+def spread_ok(r):
+    """Rank 1's effects beyond the truth's are at most the form truth's non-structural mass spread,
+    named as an added mass on all points at its size (bench.py form_scores)."""
+    return r.get("spread_named", False)
+
+
+def visible_right(r, spread=False):
     """Rank 1 holds every hidden effect that stands clearly above the model error (moves a mode by
     ≥ 3× its rms, bench.py form_scores) and nothing that was not hidden: an effect below the model's
-    own error is one no reading of these data can be asked to find."""
+    own error is one no reading of these data can be asked to find. With `spread`, the spread mass
+    named at its size counts as hidden."""
     rms = r["form_error_rms_pct"]
     truth = [(e["kind"], e["target"]) for e in r["truth"]]
     visible = {t for t, x in zip(truth, r.get("effect_shift_pct", [])) if x >= 3.0 * rms}
     kinds, targets = r["rank1"]["kind"].split("+"), r["rank1"]["target"].split("+")
     rank1 = set() if kinds == ["none"] else set(zip(kinds, targets))
-    return visible <= rank1 <= set(truth)
+    allowed = set(truth) | ({("added_mass", "all_points")} if spread and spread_ok(r) else set())
+    return visible <= rank1 <= allowed
 
 
 def form_tables(rows):
     """The model-form family's scores against issue 37's goals (docs/diagnosis-benchmark.md
-    "Model-form error"), all cases and those at 0.5–2 % noise, and its calibration."""
+    "Model-form error"), all cases and those at 0.5–2 % noise, and its calibration: first as the
+    goals were first scored (any effect beyond the discrete truth wrong), then with the form truth's
+    spread mass counted as hidden when rank 1 names it at its size (bench.py form_scores)."""
     def brier(sel, right):
         return sum((r["p_rank1"] - (1.0 if right(r) else 0.0)) ** 2 for r in sel) / max(1, len(sel))
+
+    def right_spread(r):
+        return r.get("right_spread", r["right"])
 
     def cells(sel):
         clear = [r for r in sel if r["effects_clear"]]
         none = [r for r in sel if not r["truth"]]
         exceeds = [r for r in sel if r["form_exceeds_noise"]]
+        left = [r for r in sel if r.get("form_left_exceeds_noise", r["form_exceeds_noise"])]
         high = [r for r in sel if r["p_rank1"] >= 0.9]
         return [pct(sum(r["right"] for r in clear), len(clear)), pct(sum(r["invented"] for r in none), len(none)),
                 pct(sum(r["said_inadequate"] for r in exceeds), len(exceeds)),
                 f"{brier(sel, lambda r: r['right']):.3f}", f"{brier(sel, visible_right):.3f}",
-                pct(sum(r["right"] for r in high), len(high)), pct(sum(r["right"] for r in sel), len(sel))]
+                pct(sum(r["right"] for r in high), len(high)), pct(sum(r["right"] for r in sel), len(sel)),
+                pct(sum(right_spread(r) for r in clear), len(clear)),
+                pct(sum(r.get("invented_spread", r["invented"]) for r in none), len(none)),
+                pct(sum(r["said_inadequate"] for r in left), len(left)),
+                f"{brier(sel, right_spread):.3f}", f"{brier(sel, lambda r: visible_right(r, True)):.3f}",
+                pct(sum(right_spread(r) for r in high), len(high)),
+                pct(sum(right_spread(r) for r in sel), len(sel)),
+                pct(sum(right_spread(r) or r.get("right_or_tied", False) for r in clear), len(clear))]
 
     low = [r for r in rows if r["noise"] <= 0.02 + 1e-12]
     names = ["rank 1 right, hidden effects clearly beyond the model error", "discrete effect invented, none hidden",
              "\"not adequate\" said where the model error exceeds the noise", "Brier score of rank 1's probability",
              "Brier score, right = every clearly visible hidden effect and nothing not hidden",
              "rank 1 at p ≥ 0.9 right", "rank 1 right, all cases"]
-    goals = ["≥ 90 %", "≤ 5 %", "≥ 90 %", "≤ 0.10", "–", "≥ 85 %", "–"]
+    spread_names = [n + " ‡" for n in ["rank 1 right, hidden effects clearly beyond the model error",
+                                        "discrete effect invented, none hidden",
+                                        "\"not adequate\" said where the model error rank 1 leaves exceeds the noise",
+                                        "Brier score of rank 1's probability",
+                                        "Brier score, right = every clearly visible hidden effect and nothing not hidden",
+                                        "rank 1 at p ≥ 0.9 right", "rank 1 right, all cases",
+                                        "rank 1 right or tied with the truth (`tied_with`), hidden effects clearly "
+                                        "beyond the model error"]]
+    goals = ["≥ 90 %", "≤ 5 %", "≥ 90 %", "≤ 0.10", "–", "≥ 85 %", "–", "–"]
     a, b = cells(rows), cells(low)
     lines = [f"Model-form family: {len(rows)} cases (seed {rows[0]['seed']}), {len(low)} of them at 0.5–2 % noise.\n",
-             "| score | all cases | at 0.5–2 % noise | goal (issue 37, at 0.5–2 % noise) |", "|---|---|---|---|"]
-    lines += [f"| {n} | {x} | {y} | {g} |" for n, x, y, g in zip(names, a, b, goals)]
+             "| score | all cases | at 0.5–2 % noise | goal (issue 37, at 0.5–2 % noise) |", "|---|---|---|---|",
+             "| *any effect beyond the hidden ones wrong* | | | |"]
+    lines += [f"| {n} | {x} | {y} | {g} |" for n, x, y, g in zip(names, a[:7], b[:7], goals)]
+    named = sum(r.get("spread_named", False) for r in rows)
+    lines.append(f"| ‡ *the form truth's non-structural mass spread, named by rank 1 as an added mass on all "
+                 f"points within a factor 2 of its kg, counted as hidden ({named} cases)* | | | |")
+    lines += [f"| {n} | {x} | {y} | {g} |" for n, x, y, g in zip(spread_names, a[7:], b[7:], goals)]
     bins, _ = calibration(low)
-    lines.append("\nCalibration at 0.5–2 % noise: rank 1's probability against how often rank 1 was right\n")
+    lines.append("\nCalibration at 0.5–2 % noise: rank 1's probability against how often rank 1 was right "
+                 "(any effect beyond the hidden ones wrong)\n")
     lines += calibration_table(bins, empty_bins=False)
-    missed = [r for r in low if (r["effects_clear"] and not r["right"]) or r["invented"]
-              or (r["form_exceeds_noise"] and not r["said_inadequate"])]
-    lines.append(f"\nCases at 0.5–2 % noise that miss a goal ({len(missed)}):\n")
-    lines.append("| case | noise | model error rms | truth (largest shift per effect) | rank 1 (probability) | misses |")
+    missed = [r for r in low if (r["effects_clear"] and not right_spread(r)) or r.get("invented_spread", r["invented"])
+              or (r.get("form_left_exceeds_noise", r["form_exceeds_noise"]) and not r["said_inadequate"])]
+    lines.append(f"\nCases at 0.5–2 % noise that miss a goal, the spread named at its size counted as hidden "
+                 f"({len(missed)}):\n")
+    lines.append("| case | noise | model error rms (left by rank 1) | truth (largest shift per effect) | "
+                 "rank 1 (probability) | misses |")
     lines.append("|---|---|---|---|---|---|")
     for r in missed:
-        why = [w for w, bad in (("clear effect wrong", r["effects_clear"] and not r["right"]),
-                                ("invented", r["invented"]),
-                                ("adequate said", r["form_exceeds_noise"] and not r["said_inadequate"])) if bad]
+        why = [w for w, bad in (("clear effect wrong", r["effects_clear"] and not right_spread(r)),
+                                ("invented", r.get("invented_spread", r["invented"])),
+                                ("adequate said", r.get("form_left_exceeds_noise", r["form_exceeds_noise"])
+                                 and not r["said_inadequate"])) if bad]
         truth = " + ".join(f"{e['kind']} {e['target']} ({x:.2f} %)"
                            for e, x in zip(r["truth"], r.get("effect_shift_pct", []))) or "none"
-        lines.append(f"| {r['index']} | {100 * r['noise']:.1f} % | {r['form_error_rms_pct']:.2f} % | {truth} | "
+        left = f" ({r['form_left_rms_pct']:.2f} %)" if r.get("spread_named") else ""
+        lines.append(f"| {r['index']} | {100 * r['noise']:.1f} % | {r['form_error_rms_pct']:.2f} %{left} | {truth} | "
                      f"{r['rank1']['kind']} {r['rank1']['target']} ({r['p_rank1']:.2f}) | {', '.join(why)} |")
     return "\n".join(lines) + "\n"
 

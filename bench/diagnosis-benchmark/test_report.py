@@ -57,5 +57,31 @@ class FormReport(unittest.TestCase):
         self.assertIn("| 2 | 0.5 % |", text)  # case 2 listed among the misses
 
 
+    def test_spread_named(self):
+        # Nothing hidden; rank 1 names the form truth's spread mass at its size: no invention, right.
+        spread = row(5, 0.005, [], [], [("added_mass", "all_points")], 0.7, False, exceeds=True, inadequate=False)
+        spread.update({"spread_named": True, "right_spread": True, "invented_spread": False,
+                       "form_left_exceeds_noise": False})
+        # The same rank 1 but its mass far from the spread's: invented, and the model error it leaves
+        # exceeds the noise while it says adequate.
+        wrong = dict(spread, index=6, spread_named=False, right_spread=False, invented_spread=True,
+                     form_left_exceeds_noise=True)
+        self.assertTrue(report.visible_right(spread, True))
+        self.assertFalse(report.visible_right(spread))
+        self.assertFalse(report.visible_right(wrong, True))
+        text = report.form_tables([spread, wrong])
+        lines = {ln.split(" | ")[0].lstrip("| "): ln for ln in text.splitlines() if ln.startswith("| ")}
+        self.assertIn("| 2/2 = 100.0 % | 2/2 = 100.0 % |", lines["discrete effect invented, none hidden"])
+        self.assertIn("| 1/2 = 50.0 % | 1/2 = 50.0 % |", lines["discrete effect invented, none hidden ‡"])
+        # Adequate said by both; the error left exceeds the noise in one: 0/2 strict, 0/1 with the spread.
+        self.assertIn("| 0/1 = 0.0 % | 0/1 = 0.0 % |",
+                      lines['"not adequate" said where the model error rank 1 leaves exceeds the noise ‡'])
+        # Brier with the spread: ((0.7 - 1)² + 0.7²)/2 = (0.09 + 0.49)/2 = 0.29; strict (0.49 + 0.49)/2 = 0.49
+        self.assertIn("| 0.290 |", lines["Brier score of rank 1's probability ‡"])
+        self.assertIn("| 0.490 |", lines["Brier score of rank 1's probability"])
+        self.assertIn("| 6 | 0.5 % |", text)      # the wrong one among the misses
+        self.assertNotIn("| 5 | 0.5 % |", text)   # the named spread is not
+
+
 if __name__ == "__main__":
     unittest.main()
