@@ -87,7 +87,7 @@ def choose_band(frequencies, family, damping, single_setup=True):
     2026 before 2026-11-26: both missed by the fit, reduced chi-square 46).
     Returns (lo, hi, sample rate, samples, modes in the band, contact time)."""
     f = sorted(x for x in frequencies if x > 1.0)
-    keep = ([x for x in f if x < 2000.0] if family not in ("fe", "parts", cases.FORM_FAMILY, cases.LOOKALIKE_FAMILY)
+    keep = ([x for x in f if x < 2000.0] if family not in ("fe", "parts", cases.LOOKALIKE_FAMILY) + cases.FORM_FAMILIES
             else [x for x in f if x < 2500.0][:8 if family in ("parts", cases.LOOKALIKE_FAMILY) else 6])
     if len(keep) < 2:
         keep = f[:2]
@@ -412,7 +412,7 @@ def run_case(ema, index, seed, work, keep, family=None, replan_lookalikes=False)
     times["total"] = time.monotonic() - t0
     diag = read_json(os.path.join(folder, "diag.json"))
     result = score(case, diag, corr_after, corr_before, times)
-    if case["family"] == cases.FORM_FAMILY:
+    if case["family"] in cases.FORM_FAMILIES:
         result.update(form_scores(ema, case, folder, diag, lo, hi, shifts))
     if replan_lookalikes:
         result["replan"] = replan(ema, case, folder, tests, lo, hi, times, index)
@@ -518,7 +518,7 @@ def main():
         q.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"benchmark seed (default {DEFAULT_SEED})")
         q.add_argument("--work", default="diagnosis-benchmark-work", help="folder for cases and scores")
         q.add_argument("--keep", action="store_true", help="keep each case's files (default: scores only)")
-        q.add_argument("--family", choices=[cases.FORM_FAMILY, cases.LOOKALIKE_FAMILY], default=None,
+        q.add_argument("--family", choices=[*cases.FORM_FAMILIES, cases.LOOKALIKE_FAMILY], default=None,
                        help="the model-form family (truth richer than the model) or the look-alike family "
                             "(mirror pairs a first test at mid-span cannot tell apart; with --replan); "
                             "default: the four families")

@@ -269,11 +269,23 @@ def build_fe(rng, files):
            [-12, -6 * le, 12, -6 * le], [6 * le, 2 * le * le, -6 * le, 4 * le * le]]
     mel = [[156, 22 * le, 54, -13 * le], [22 * le, 4 * le * le, 13 * le, -3 * le * le],
            [54, 13 * le, 156, -22 * le], [-13 * le, -3 * le * le, -22 * le, 4 * le * le]]
-    def assemble(k_factors=None, m_factors=None, extra_mass_per_length=0.0):
+    # Rotary inertia of the section (consistent, Przemieniecki): ρ I / (30 le) × this.
+    rel = [[36, 3 * le, -36, 3 * le], [3 * le, 4 * le * le, -3 * le, -le * le],
+           [-36, -3 * le, 36, -3 * le], [3 * le, -le * le, -3 * le, 4 * le * le]]
+
+    def assemble(k_factors=None, m_factors=None, extra_mass_per_length=0.0, shear_ratio=0.0, rotary=False,
+                 rotational_restraints=None):
         """K and M of the beam; per element a stiffness and a mass factor (the model-form
         family's truth: element-wise scatter the nominal model cannot express) and a
-        non-structural mass spread along it (kg/m)."""
+        non-structural mass spread along it (kg/m). The richer truth of the form-rich family adds
+        what an Euler beam on translational springs cannot say at all: shear flexibility
+        (Timoshenko's element, Φ = 12 EI·shear_ratio / (E A le²), shear_ratio = E / (κ G)), the
+        section's rotary inertia, and rotational restraints (node -> N·m/rad) at the supports."""
         kk, mm = {}, {}
+        phi = shear_ratio * height ** 2 / le ** 2  # 12 EI r / (E A le²) with I / A = h² / 12
+        ks = [[12, 6 * le, -12, 6 * le], [6 * le, (4 + phi) * le * le, -6 * le, (2 - phi) * le * le],
+              [-12, -6 * le, 12, -6 * le], [6 * le, (2 - phi) * le * le, -6 * le, (4 + phi) * le * le]]
+        rho_i = mpl * height ** 2 / 12.0 if rotary else 0.0
         for e in range(elements):
             kf = k_factors[e] if k_factors else 1.0
             mf = m_factors[e] if m_factors else 1.0
@@ -282,8 +294,12 @@ def build_fe(rng, files):
                     r, c = 2 * e + i, 2 * e + j
                     if r < c:
                         continue
-                    kk[(r, c)] = kk.get((r, c), 0.0) + kel[i][j] * ei * kf / le ** 3
-                    mm[(r, c)] = mm.get((r, c), 0.0) + mel[i][j] * (mpl * mf + extra_mass_per_length) * le / 420.0
+                    kk[(r, c)] = kk.get((r, c), 0.0) + ks[i][j] * ei * kf / (le ** 3 * (1.0 + phi))
+                    mm[(r, c)] = (mm.get((r, c), 0.0) + mel[i][j] * (mpl * mf + extra_mass_per_length) * le / 420.0
+                                  + rel[i][j] * rho_i * mf / (30.0 * le))
+        for node, k in (rotational_restraints or {}).items():
+            d = 2 * (node - 1) + 1
+            kk[(d, d)] = kk.get((d, d), 0.0) + k
         return kk, mm
 
     kk, mm = assemble()
@@ -306,7 +322,8 @@ def build_fe(rng, files):
                  f"{{ linear = {{ k = {fmt(k)} }} }}", k, a_node=node)
     for i in range(1, nodes + 1):
         m.point(100 + i, node=i)
-    m.form = {"assemble": assemble, "elements": elements, "nodes": nodes, "mass_per_length": mpl, "length": length}
+    m.form = {"assemble": assemble, "elements": elements, "nodes": nodes, "mass_per_length": mpl, "length": length,
+              "height": height, "ei": ei, "support_nodes": support_nodes}
     return m, [None]
 
 
@@ -530,6 +547,14 @@ def draw_parameter(rng, kind, target, m, mean_k, fe_mass):
 # by (index // 3) % 3).
 FORM_FAMILY = "form"
 FORM_EFFECT_COUNTS = (0, 1, 2)
+# The form-rich family (issue 37 item 4; bench.py --family form-rich): the same cases as the
+# form family, index by index (the same beam, scatter, spread mass, hidden effects, plan and
+# noise), with errors no effect of the vocabulary can say added from a separate draw — shear
+# flexibility and rotary inertia the Euler beam lacks, sized so that they lower the fifth bending
+# mode by 0.3–3 % (the rotary inertia left out where it alone would exceed that), and a rotational
+# restraint at each support the model's translational springs lack (0.01–0.3 × EI/L each).
+FORM_RICH_FAMILY = "form-rich"
+FORM_FAMILIES = (FORM_FAMILY, FORM_RICH_FAMILY)
 
 # The look-alike family (issue 40; bench.py --family lookalike --replan): the footbridge frame made
 # mirror-symmetric about mid-span, the truth one of a mirror pair — a point mass at a test point or
@@ -575,10 +600,12 @@ def make_case(index, seed, attempt=0, family=None):
     draws the case again (bench.py redraws a case whose hidden effect the test cannot see).
     `family` FORM_FAMILY: the model-form family (its own draws; the four families' cases are
     unchanged)."""
-    form = family == FORM_FAMILY
+    form = family in FORM_FAMILIES
     if family == LOOKALIKE_FAMILY:
         return make_lookalike_case(index, seed, attempt)
     rng = random.Random(f"diagnosis-benchmark:{seed}:{index}" + (":form" if form else "") + (f":{attempt}" if attempt else ""))
+    # The form-rich family's extra errors from their own stream: its cases are the form family's.
+    rich = random.Random(f"diagnosis-benchmark:{seed}:{index}:form-rich" + (f":{attempt}" if attempt else ""))
     if form:
         noise = NOISE_LEVELS[index % 3]
         n_effects = FORM_EFFECT_COUNTS[(index // 3) % 3]
@@ -595,14 +622,27 @@ def make_case(index, seed, attempt=0, family=None):
         k_factors = [math.exp(scatter * rng.gauss(0.0, 1.0)) for _ in range(f["elements"])]
         m_factors = [math.exp(0.5 * scatter * rng.gauss(0.0, 1.0)) for _ in range(f["elements"])]
         extra = f["mass_per_length"] * rng.uniform(0.0, 0.03)
-        kk, mm = f["assemble"](k_factors, m_factors, extra)
-        files["truth-fe/K.mtx"] = write_mtx(2 * f["nodes"], kk)
-        files["truth-fe/M.mtx"] = write_mtx(2 * f["nodes"], mm)
         form_error = {"stiffness_scatter": scatter, "mass_scatter": 0.5 * scatter,
                       "nonstructural_mass_share": extra / f["mass_per_length"],
                       "nonstructural_mass_kg": extra * f["length"]}
+        rich_args = {}
+        if family == FORM_RICH_FAMILY:
+            # Shear + rotary inertia lower bending mode n by about ½ (nπ)² (h² / 12 L²)(1 + E/κG).
+            slender = (5 * math.pi) ** 2 * f["height"] ** 2 / (12.0 * f["length"] ** 2)
+            # Sized, not taken from the section: the rotary inertia where it alone stays below the
+            # target (a thick beam's would not), the rest shear flexibility.
+            target = log_uniform(rich, 0.003, 0.03)
+            rotary = 0.5 * slender <= target
+            shear_ratio = 2.0 * target / slender - (1.0 if rotary else 0.0)
+            restraints = {node: f["ei"] / f["length"] * log_uniform(rich, 0.01, 0.3) for node in f["support_nodes"]}
+            rich_args = {"shear_ratio": shear_ratio, "rotary": rotary, "rotational_restraints": restraints}
+            form_error.update({"shear_ratio": shear_ratio, "rotary_inertia": rotary, "fifth_mode_drop": target,
+                               "rotational_restraints": {str(k): v for k, v in restraints.items()}})
+        kk, mm = f["assemble"](k_factors, m_factors, extra, **rich_args)
+        files["truth-fe/K.mtx"] = write_mtx(2 * f["nodes"], kk)
+        files["truth-fe/M.mtx"] = write_mtx(2 * f["nodes"], mm)
     fe_mass = getattr(m, "fe_mass", 0.0)
-    if family in ("fe", FORM_FAMILY):
+    if family in ("fe",) + FORM_FAMILIES:
         # The FE beam's mass from its M matrix: translational share (consistent matrix ~ whole).
         fe_mass = sum(v for (r, c), v in _parse_mtx(files["fe/M.mtx"]).items() if r == c and r % 2 == 0)
     choices = effect_choices("fe" if form else family, m)

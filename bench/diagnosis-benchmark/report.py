@@ -216,6 +216,7 @@ def tables(rows):
 
 
 BEGIN_FORM = "<!-- BEGIN GENERATED: bench.py gather, model-form family -->"
+BEGIN_FORM_RICH = "<!-- BEGIN GENERATED: bench.py gather, form-rich family -->"
 
 
 def spread_ok(r):
@@ -282,7 +283,8 @@ def form_tables(rows):
                                         "beyond the model error"]]
     goals = ["≥ 90 %", "≤ 5 %", "≥ 90 %", "≤ 0.10", "–", "≥ 85 %", "–", "–"]
     a, b = cells(rows), cells(low)
-    lines = [f"Model-form family: {len(rows)} cases (seed {rows[0]['seed']}), {len(low)} of them at 0.5–2 % noise.\n",
+    name = "Form-rich family" if rows[0].get("family") == "form-rich" else "Model-form family"
+    lines = [f"{name}: {len(rows)} cases (seed {rows[0]['seed']}), {len(low)} of them at 0.5–2 % noise.\n",
              "| score | all cases | at 0.5–2 % noise | goal (issue 37, at 0.5–2 % noise) |", "|---|---|---|---|",
              "| *any effect beyond the hidden ones wrong* | | | |"]
     lines += [f"| {n} | {x} | {y} | {g} |" for n, x, y, g in zip(names, a[:7], b[:7], goals)]
@@ -318,7 +320,8 @@ def gather(work, doc, svg_path):
     rows = load(work)
     if not rows:
         raise SystemExit(f"bench.py gather: no score files under {work}/scores")
-    form = all(r.get("family") == "form" for r in rows)
+    family = rows[0].get("family")
+    form = family in ("form", "form-rich") and all(r.get("family") == family for r in rows)
     if form:  # the model-form family has its own scores and its own generated section
         text = form_tables(rows)
         bins, brier = calibration(rows)
@@ -338,7 +341,7 @@ def gather(work, doc, svg_path):
     if doc:
         with open(doc) as f:
             page = f.read()
-        begin = BEGIN_FORM if form else BEGIN
+        begin = (BEGIN_FORM_RICH if family == "form-rich" else BEGIN_FORM) if form else BEGIN
         if begin not in page or END not in page.split(begin, 1)[-1]:
             raise SystemExit(f"bench.py gather: {doc} has no '{begin}' ... '{END}' section to replace")
         head, rest = page.split(begin, 1)
