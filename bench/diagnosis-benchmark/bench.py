@@ -5,6 +5,7 @@
   bench.py gather --work DIR [--doc docs/diagnosis-benchmark.md --svg docs/img/diagnosis-calibration.svg]
   bench.py check  --ema EMA --cases 0:21 --floor 0.9 [--work DIR]      (the CI test)
   bench.py run    --ema EMA --family form --cases 0:60 [--jobs N]       (the model-form family)
+  bench.py run    --ema EMA --family form-rich --cases 0:120              (the same cases, errors no effect can say)
   bench.py run    --ema EMA --cases 0:200 --replan                        (look-alikes: the follow-up test ema plan makes)
   bench.py run    --ema EMA --family lookalike --cases 0:10 --replan      (mirror pairs tied by the first test)
   bench.py run    --ema EMA --keep ... then --reuse --diagnose-arg=--shape-residual --diagnose-arg=mac
@@ -519,7 +520,8 @@ def main():
         q.add_argument("--work", default="diagnosis-benchmark-work", help="folder for cases and scores")
         q.add_argument("--keep", action="store_true", help="keep each case's files (default: scores only)")
         q.add_argument("--family", choices=[*cases.FORM_FAMILIES, cases.LOOKALIKE_FAMILY], default=None,
-                       help="the model-form family (truth richer than the model) or the look-alike family "
+                       help="the model-form family (truth richer than the model), form-rich (its cases with "
+                            "shear, rotary inertia and support restraints no effect can say) or the look-alike family "
                             "(mirror pairs a first test at mid-span cannot tell apart; with --replan); "
                             "default: the four families")
         q.add_argument("--replan", action="store_true",
