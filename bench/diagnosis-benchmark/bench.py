@@ -204,15 +204,15 @@ def draw_visible_case(ema, index, seed, folder, family=None):
     (five times the diagnosis' frequency floor of 0.1 %), and no diagnosis can be scored on it.
     Returns the case, the band and the draws that were set aside."""
     set_aside = []
+    # --reuse: the kept tests (modes-*.unv/.json) survive the case being written afresh.
+    kept = {}
+    if REUSE_TESTS and os.path.isdir(folder):
+        for name in os.listdir(folder):
+            if name.startswith("modes-") and name.endswith((".unv", ".json")):
+                with open(os.path.join(folder, name), "rb") as f:
+                    kept[name] = f.read()
     for attempt in range(MAX_ATTEMPTS):
         case = cases.make_case(index, seed, attempt, family)
-        # --reuse: the kept tests (modes-*.unv/.json) survive the case being written afresh.
-        kept = {}
-        if REUSE_TESTS and os.path.isdir(folder):
-            for name in os.listdir(folder):
-                if name.startswith("modes-") and name.endswith((".unv", ".json")):
-                    with open(os.path.join(folder, name), "rb") as f:
-                        kept[name] = f.read()
         shutil.rmtree(folder, ignore_errors=True)
         os.makedirs(folder)
         for name, data in kept.items():

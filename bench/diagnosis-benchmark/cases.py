@@ -604,8 +604,6 @@ def make_case(index, seed, attempt=0, family=None):
     if family == LOOKALIKE_FAMILY:
         return make_lookalike_case(index, seed, attempt)
     rng = random.Random(f"diagnosis-benchmark:{seed}:{index}" + (":form" if form else "") + (f":{attempt}" if attempt else ""))
-    # The form-rich family's extra errors from their own stream: its cases are the form family's.
-    rich = random.Random(f"diagnosis-benchmark:{seed}:{index}:form-rich" + (f":{attempt}" if attempt else ""))
     if form:
         noise = NOISE_LEVELS[index % 3]
         n_effects = FORM_EFFECT_COUNTS[(index // 3) % 3]
@@ -627,6 +625,8 @@ def make_case(index, seed, attempt=0, family=None):
                       "nonstructural_mass_kg": extra * f["length"]}
         rich_args = {}
         if family == FORM_RICH_FAMILY:
+            # Its extra errors from their own stream: its cases stay the form family's.
+            rich = random.Random(f"diagnosis-benchmark:{seed}:{index}:form-rich" + (f":{attempt}" if attempt else ""))
             # Shear + rotary inertia lower bending mode n by about ½ (nπ)² (h² / 12 L²)(1 + E/κG).
             slender = (5 * math.pi) ** 2 * f["height"] ** 2 / (12.0 * f["length"] ** 2)
             # Sized, not taken from the section: the rotary inertia where it alone stays below the

@@ -219,12 +219,6 @@ BEGIN_FORM = "<!-- BEGIN GENERATED: bench.py gather, model-form family -->"
 BEGIN_FORM_RICH = "<!-- BEGIN GENERATED: bench.py gather, form-rich family -->"
 
 
-def spread_ok(r):
-    """Rank 1's effects beyond the truth's are at most the form truth's non-structural mass spread,
-    named as an added mass on all points at its size (bench.py form_scores)."""
-    return r.get("spread_named", False)
-
-
 def visible_right(r, spread=False):
     """Rank 1 holds every hidden effect that stands clearly above the model error (moves a mode by
     ≥ 3× its rms, bench.py form_scores) and nothing that was not hidden: an effect below the model's
@@ -235,7 +229,7 @@ def visible_right(r, spread=False):
     visible = {t for t, x in zip(truth, r.get("effect_shift_pct", [])) if x >= 3.0 * rms}
     kinds, targets = r["rank1"]["kind"].split("+"), r["rank1"]["target"].split("+")
     rank1 = set() if kinds == ["none"] else set(zip(kinds, targets))
-    allowed = set(truth) | ({("added_mass", "all_points")} if spread and spread_ok(r) else set())
+    allowed = set(truth) | ({("added_mass", "all_points")} if spread and r.get("spread_named", False) else set())
     return visible <= rank1 <= allowed
 
 
@@ -247,40 +241,37 @@ def form_tables(rows):
     def brier(sel, right):
         return sum((r["p_rank1"] - (1.0 if right(r) else 0.0)) ** 2 for r in sel) / max(1, len(sel))
 
-    def right_spread(r):
-        return r.get("right_spread", r["right"])
+    # The two views: strict (any effect beyond the hidden ones wrong) and with the spread named at its
+    # size counted as hidden (fields absent from older score files fall back to the strict ones).
+    strict = (lambda r: r["right"], lambda r: r["invented"], lambda r: r["form_exceeds_noise"], visible_right)
+    spread = (lambda r: r.get("right_spread", r["right"]), lambda r: r.get("invented_spread", r["invented"]),
+              lambda r: r.get("form_left_exceeds_noise", r["form_exceeds_noise"]), lambda r: visible_right(r, True))
+
+    def scores(sel, view):
+        right, invented, exceeds, visible = view
+        clear = [r for r in sel if r["effects_clear"]]
+        none = [r for r in sel if not r["truth"]]
+        inadequate = [r for r in sel if exceeds(r)]
+        high = [r for r in sel if r["p_rank1"] >= 0.9]
+        return [pct(sum(right(r) for r in clear), len(clear)), pct(sum(invented(r) for r in none), len(none)),
+                pct(sum(r["said_inadequate"] for r in inadequate), len(inadequate)),
+                f"{brier(sel, right):.3f}", f"{brier(sel, visible):.3f}",
+                pct(sum(right(r) for r in high), len(high)), pct(sum(right(r) for r in sel), len(sel))]
 
     def cells(sel):
         clear = [r for r in sel if r["effects_clear"]]
-        none = [r for r in sel if not r["truth"]]
-        exceeds = [r for r in sel if r["form_exceeds_noise"]]
-        left = [r for r in sel if r.get("form_left_exceeds_noise", r["form_exceeds_noise"])]
-        high = [r for r in sel if r["p_rank1"] >= 0.9]
-        return [pct(sum(r["right"] for r in clear), len(clear)), pct(sum(r["invented"] for r in none), len(none)),
-                pct(sum(r["said_inadequate"] for r in exceeds), len(exceeds)),
-                f"{brier(sel, lambda r: r['right']):.3f}", f"{brier(sel, visible_right):.3f}",
-                pct(sum(r["right"] for r in high), len(high)), pct(sum(r["right"] for r in sel), len(sel)),
-                pct(sum(right_spread(r) for r in clear), len(clear)),
-                pct(sum(r.get("invented_spread", r["invented"]) for r in none), len(none)),
-                pct(sum(r["said_inadequate"] for r in left), len(left)),
-                f"{brier(sel, right_spread):.3f}", f"{brier(sel, lambda r: visible_right(r, True)):.3f}",
-                pct(sum(right_spread(r) for r in high), len(high)),
-                pct(sum(right_spread(r) for r in sel), len(sel)),
-                pct(sum(right_spread(r) or r.get("right_or_tied", False) for r in clear), len(clear))]
+        tied = pct(sum(spread[0](r) or r.get("right_or_tied", False) for r in clear), len(clear))
+        return scores(sel, strict) + scores(sel, spread) + [tied]
 
     low = [r for r in rows if r["noise"] <= 0.02 + 1e-12]
     names = ["rank 1 right, hidden effects clearly beyond the model error", "discrete effect invented, none hidden",
              "\"not adequate\" said where the model error exceeds the noise", "Brier score of rank 1's probability",
              "Brier score, right = every clearly visible hidden effect and nothing not hidden",
              "rank 1 at p ≥ 0.9 right", "rank 1 right, all cases"]
-    spread_names = [n + " ‡" for n in ["rank 1 right, hidden effects clearly beyond the model error",
-                                        "discrete effect invented, none hidden",
-                                        "\"not adequate\" said where the model error rank 1 leaves exceeds the noise",
-                                        "Brier score of rank 1's probability",
-                                        "Brier score, right = every clearly visible hidden effect and nothing not hidden",
-                                        "rank 1 at p ≥ 0.9 right", "rank 1 right, all cases",
-                                        "rank 1 right or tied with the truth (`tied_with`), hidden effects clearly "
-                                        "beyond the model error"]]
+    spread_names = [n + " ‡" for n in names[:2] + ["\"not adequate\" said where the model error rank 1 leaves "
+                                                   "exceeds the noise"] + names[3:]
+                    + ["rank 1 right or tied with the truth (`tied_with`), hidden effects clearly beyond the "
+                       "model error"]]
     goals = ["≥ 90 %", "≤ 5 %", "≥ 90 %", "≤ 0.10", "–", "≥ 85 %", "–", "–"]
     a, b = cells(rows), cells(low)
     name = "Form-rich family" if rows[0].get("family") == "form-rich" else "Model-form family"
@@ -296,18 +287,18 @@ def form_tables(rows):
     lines.append("\nCalibration at 0.5–2 % noise: rank 1's probability against how often rank 1 was right "
                  "(any effect beyond the hidden ones wrong)\n")
     lines += calibration_table(bins, empty_bins=False)
-    missed = [r for r in low if (r["effects_clear"] and not right_spread(r)) or r.get("invented_spread", r["invented"])
-              or (r.get("form_left_exceeds_noise", r["form_exceeds_noise"]) and not r["said_inadequate"])]
+    right, invented, exceeds, _ = spread
+    missed = [r for r in low if (r["effects_clear"] and not right(r)) or invented(r)
+              or (exceeds(r) and not r["said_inadequate"])]
     lines.append(f"\nCases at 0.5–2 % noise that miss a goal, the spread named at its size counted as hidden "
                  f"({len(missed)}):\n")
     lines.append("| case | noise | model error rms (left by rank 1) | truth (largest shift per effect) | "
                  "rank 1 (probability) | misses |")
     lines.append("|---|---|---|---|---|---|")
     for r in missed:
-        why = [w for w, bad in (("clear effect wrong", r["effects_clear"] and not right_spread(r)),
-                                ("invented", r.get("invented_spread", r["invented"])),
-                                ("adequate said", r.get("form_left_exceeds_noise", r["form_exceeds_noise"])
-                                 and not r["said_inadequate"])) if bad]
+        why = [w for w, bad in (("clear effect wrong", r["effects_clear"] and not right(r)),
+                                ("invented", invented(r)),
+                                ("adequate said", exceeds(r) and not r["said_inadequate"])) if bad]
         truth = " + ".join(f"{e['kind']} {e['target']} ({x:.2f} %)"
                            for e, x in zip(r["truth"], r.get("effect_shift_pct", []))) or "none"
         left = f" ({r['form_left_rms_pct']:.2f} %)" if r.get("spread_named") else ""

@@ -20,6 +20,11 @@ def row(index, noise, truth, shifts, rank1, p, right, rms=0.5, exceeds=True, ina
             "invented": not truth and bool(rank1), "form_exceeds_noise": exceeds, "said_inadequate": inadequate}
 
 
+def table_rows(text):
+    """The table rows of form_tables' text by their first cell."""
+    return {ln.split(" | ")[0].lstrip("| "): ln for ln in text.splitlines() if ln.startswith("| ")}
+
+
 SUPPORTS = ("series_compliance", "supports")
 MASS = ("added_mass", "points:102")
 ROWS = [
@@ -45,7 +50,7 @@ class FormReport(unittest.TestCase):
 
     def test_table(self):
         text = report.form_tables(ROWS)
-        lines = {ln.split(" | ")[0].lstrip("| "): ln for ln in text.splitlines() if ln.startswith("| ")}
+        lines = table_rows(text)
         self.assertIn("| 1/1 = 100.0 % | 1/1 = 100.0 % |", lines["rank 1 right, hidden effects clearly beyond the model error"])
         self.assertIn("| 1/2 = 50.0 % | 1/1 = 100.0 % |", lines["discrete effect invented, none hidden"])
         self.assertIn("| 3/4 = 75.0 % | 2/3 = 66.7 % |",
@@ -70,7 +75,7 @@ class FormReport(unittest.TestCase):
         self.assertFalse(report.visible_right(spread))
         self.assertFalse(report.visible_right(wrong, True))
         text = report.form_tables([spread, wrong])
-        lines = {ln.split(" | ")[0].lstrip("| "): ln for ln in text.splitlines() if ln.startswith("| ")}
+        lines = table_rows(text)
         self.assertIn("| 2/2 = 100.0 % | 2/2 = 100.0 % |", lines["discrete effect invented, none hidden"])
         self.assertIn("| 1/2 = 50.0 % | 1/2 = 50.0 % |", lines["discrete effect invented, none hidden ‡"])
         # Adequate said by both; the error left exceeds the noise in one: 0/2 strict, 0/1 with the spread.

@@ -225,7 +225,7 @@ void Rank(std::vector<Candidate>* all, const Candidate& none) {
     Candidate& first = all->front();
     if (!first.error.empty() || !outside(first) || first.noise_consistent) break;
     auto plausible = std::find_if(all->begin() + 1, all->end(), [&](const Candidate& c) {
-      // Similar fit: the frequency misfit's rms within 2× of the far reading's.
+      // Similar fit: the frequency misfit's rms within 2× of the far reading's, the evidence within 20×.
       return c.error.empty() && std::isfinite(c.score) && !outside(c) && c.reduced_chi2 <= 4.0 * first.reduced_chi2 &&
              c.score - first.score <= kSimilarFitScore;
     });
