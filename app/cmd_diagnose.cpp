@@ -208,7 +208,12 @@ std::string app::DiagnosisSummary(const pipeline::DiagnoseStage& stage) {
   };
   if (f.model_inadequate) InadequateModelWords(d, f, &out);
   if (f.effects.empty()) {
-    if (f.model_inadequate)
+    if (f.model_inadequate && f.model_error_lookalike)
+      // Inside the vocabulary after all: a reading the model's own error also explains.
+      out << "Diagnosis: no effect the model can try explains the mismatch beyond the model's own error (the model "
+             "as given ranks first, probability "
+          << Percent(f.rank_one_probability) << ")" << report::ModelErrorLookAlikeWords(f) << "\n";
+    else if (f.model_inadequate)
       // Not "nothing is missing": something is, but none of the vocabulary's effects explains it
       // beyond the model's own error.
       out << "Diagnosis: no effect the model can try explains the mismatch beyond the model's own error (the model "

@@ -155,6 +155,7 @@
       st.appendChild(el('p', { 'class': 'lead', text: n ?
         'Rank 1 of ' + view.candidate_count + ' candidates (probability ' + pct(story.probability) + ' for this exact ' +
         'reading). Each effect below with its probability summed over every candidate that holds it, and its fitted value ± 1σ:' :
+        story.model_error_lookalike ||
         'No candidate explains the mismatch by more than its prior and parameter cost (probability ' + pct(story.probability) + ').' }));
       if (n) {
         st.appendChild(el('ol', { 'class': 'effects' }, story.effects.map(function (e) {

@@ -224,6 +224,12 @@ json DiagnosisView(const pipeline::DiagnoseStage& stage) {
                                 ") is larger than the test's σ: no reading of the vocabulary makes the "
                                 "model exact, and the probabilities compare the readings tried with each other only.";
   }
+  // Rank 1 the model as given, still inadequate, and a reading its own error also explains: the
+  // lead says so instead of "no candidate explains the mismatch".
+  story["model_error_lookalike"] = nullptr;
+  if (f.model_inadequate && f.model_error_lookalike)
+    story["model_error_lookalike"] = "The model as given ranks first (probability " + Percent(f.rank_one_probability) +
+                                     ")" + ModelErrorLookAlikeWords(f);
   // Look-alikes: the readings the diagnosis found within a factor 20 of rank 1 (Findings::lookalikes).
   json alike = json::array();
   for (const pipeline::LookAlike& l : f.lookalikes) {

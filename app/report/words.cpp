@@ -80,4 +80,19 @@ std::string EffectValuesWords(const pipeline::EffectFinding& f) {
   return out + (out.empty() ? "" : "; ") + springs;
 }
 
+std::string ModelErrorLookAlikeWords(const pipeline::Findings& f) {
+  if (!f.model_error_lookalike) return "";
+  const pipeline::ModelErrorLookAlike& l = *f.model_error_lookalike;
+  const diagnose::ModelError& e = f.model_error;  // rank 1's: what the model as given needs
+  const bool shared = e.frequency_common_rel >= e.frequency_rel;
+  const std::string size = Significant(100.0 * (shared ? e.frequency_common_rel : e.frequency_rel), 2) + " %";
+  return ", but the next reading, " + l.description + " (" + Percent(l.probability) +
+         "), brings the mean frequency error from " + FixedPoint(f.error_after_pct, 2) + " % to " +
+         FixedPoint(l.error_after_pct, 2) + " %: these data cannot tell it from an error of the model's own (" +
+         (shared ? size + " shared by all its frequencies" : "about " + size + " of each frequency") +
+         "), and the priors order the two. If the model is known to be " +
+         (shared ? "right overall (its stiffness-to-mass ratio) to better than " : "right mode by mode to better than ") +
+         size + ", take that reading.";
+}
+
 }  // namespace ema::report

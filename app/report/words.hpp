@@ -35,4 +35,13 @@ std::string ParameterWords(const diagnose::FittedParameter& parameter, const mod
 /// alone: 21.8 N/µm at stud-5um)".
 std::string EffectValuesWords(const pipeline::EffectFinding& finding);
 
+/// Rank 1 the model as given and a reading its own error also explains
+/// (pipeline::Findings::model_error_lookalike): "…, but the next reading, an added mass of 57.6 g
+/// per point at all_points (13.9 %), brings the mean frequency error from 4.32 % to 0.92 %: these
+/// data cannot tell it from an error of the model's own (3.5 % shared by all its frequencies), and
+/// the priors order the two. If the model is known to be right overall … take that reading." The
+/// sentence after "Diagnosis: no effect the model can try explains the mismatch beyond the
+/// model's own error (the model as given ranks first, probability P)"; "" without such a reading.
+std::string ModelErrorLookAlikeWords(const pipeline::Findings& findings);
+
 }  // namespace ema::report

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "ema/model/effects.hpp"
 #include "ema/model/solve.hpp"
@@ -9,6 +10,8 @@
 namespace ema::pipeline {
 
 namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // Per setup, the mean linearised stiffness of the target's springs with rank 1's effects, and of
 // the series element the effect added: the numbers of a mount or joint an engineer compares with
@@ -58,6 +61,26 @@ ModeVerdict VerdictOf(const ModeEvidence& m) {
   if (f > 3.0 || s > 3.0) return ModeVerdict::kMisfit;
   if (f > 2.0 || s > 2.0) return ModeVerdict::kMarginal;
   return ModeVerdict::kWithinNoise;
+}
+
+// True when `reading` moves the frequency of every test mode paired in both (at least two) the
+// same way, by between ½ and 2× each other: a uniform shift — an added mass spread over every
+// point, a material constant — which an error shared by all the model's frequencies also is. A
+// point mass moves the modes by their amplitude at its point, tens of times apart.
+bool MovesEveryModeAlike(const diagnose::Candidate& as_given, const diagnose::Candidate& reading) {
+  double smallest = kInfinity, largest = 0.0;
+  int up = 0, down = 0;
+  for (const diagnose::ModeComparison& a : reading.modes)
+    for (const diagnose::ModeComparison& b : as_given.modes) {
+      if (a.setup != b.setup || a.test_mode != b.test_mode) continue;
+      if (a.model_mode < 0 || b.model_mode < 0 || !(a.model_frequency_hz > 0.0) || !(b.model_frequency_hz > 0.0)) break;
+      const double shift = a.model_frequency_hz / b.model_frequency_hz - 1.0;
+      (shift > 0.0 ? up : down) += 1;
+      smallest = std::min(smallest, std::abs(shift));
+      largest = std::max(largest, std::abs(shift));
+      break;
+    }
+  return up + down >= 2 && (up == 0 || down == 0) && smallest > 0.0 && largest <= 2.0 * smallest;
 }
 
 }  // namespace
@@ -133,6 +156,20 @@ Findings FindingsOf(const diagnose::Diagnosis& d, const model::Model& model) {
     out.lookalikes.push_back({g.kind, g.target, others, holds_first, SpanOf(d, g), p});
     if (out.lookalikes.size() == 4) break;
   }
+
+  // Rank 1 the model as given, still inadequate: the next reading with effects, when the data
+  // cannot tell it from the model's own error — a look-alike that halves the frequency error by
+  // moving every mode alike, the pattern of an error all the modes share.
+  if (out.model_inadequate && first.IsNone())
+    for (const diagnose::Candidate& c : d.candidates) {
+      if (c.IsNone()) continue;
+      if (diagnose::IsLookAlike(c.probability, first.probability) &&
+          c.mean_abs_frequency_error_pct <= 0.5 * first.mean_abs_frequency_error_pct && MovesEveryModeAlike(first, c))
+        out.model_error_lookalike =
+            ModelErrorLookAlike{c.rank, diagnose::DescribeCandidate(c, false), c.probability,
+                                c.mean_abs_frequency_error_pct, c.model_error};
+      break;  // the most probable reading with effects only: candidates are in rank order
+    }
 
   // Evidence per test mode, as given and with rank 1, and each mode's share of the fall in χ².
   double total_drop = 0.0;

@@ -61,6 +61,18 @@ json DiagnosisJson(const DiagnoseStage& stage) {
   json out = formats::DiagnosisJson(d, stage.options);
   if (!d.candidates.empty()) out["modes"] = formats::DiagnosisModeRows(d.baseline, d.candidates.front());
   out["findings"] = FindingsJson(stage.findings);
+  // Rank 1 "none" in a model that stays inadequate: the reading its own error also explains.
+  out["model_error_lookalike"] = nullptr;
+  if (const auto& l = stage.findings.model_error_lookalike)
+    out["model_error_lookalike"] = {{"rank", l->rank},
+                                    {"description", l->description},
+                                    {"probability", l->probability},
+                                    {"mean_abs_frequency_error_pct", NumberOrNull(l->error_after_pct)},
+                                    {"model_error",
+                                     {{"frequency_rel", NumberOrNull(l->model_error.frequency_rel)},
+                                      {"frequency_common_rel", NumberOrNull(l->model_error.frequency_common_rel)},
+                                      {"shape", NumberOrNull(l->model_error.shape)},
+                                      {"dominates", l->model_error.dominates}}}};
   if (stage.nonlinearity) {
     json nonlinearity = formats::AmplitudeJson(*stage.nonlinearity);
     bool flagged = false;

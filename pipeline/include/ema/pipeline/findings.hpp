@@ -66,6 +66,22 @@ struct ModeEvidence {
   ModeVerdict verdict = ModeVerdict::kUnpaired;  ///< after: > 3σ misfit, > 2σ marginal
 };
 
+/// When the model as given ranks first and stays inadequate: the most probable reading with
+/// effects, when it is a look-alike of rank 1 (within a factor 20), takes at least half of the
+/// mean frequency error away and moves every paired mode the same way by within a factor 2 of
+/// each other. Such a uniform shift (an added mass spread over all points, a material constant)
+/// and an error every frequency of the model shares are one pattern in the frequencies, so the
+/// data cannot tell the two apart and the priors order them: the reading is inside the
+/// vocabulary, and an engineer who trusts the model to better than that error should take it.
+/// (A point mass that absorbs some scatter moves the modes tens of times apart: not said here.)
+struct ModelErrorLookAlike {
+  int rank = 0;
+  std::string description;                          ///< diagnose::DescribeCandidate
+  double probability = 0.0;
+  double error_after_pct = std::numeric_limits<double>::quiet_NaN();  ///< its mean frequency error
+  diagnose::ModelError model_error;                 ///< the model's own error inferred with it
+};
+
 /// The kinds of missing physics the misfit pattern of rank 1 fits, when no reading of the
 /// vocabulary makes the model adequate.
 struct MisfitPattern {
@@ -91,6 +107,8 @@ struct Findings {
   MisfitPattern pattern;                   ///< with model_inadequate
   std::vector<int> worst_modes;            ///< indices into `modes`, furthest off first (at most 3)
   std::vector<LookAlike> lookalikes;       ///< at most 4, most probable group first
+  /// Rank 1 "none" in a model that stays inadequate: the reading the model's error also explains.
+  std::optional<ModelErrorLookAlike> model_error_lookalike;
   std::vector<std::string> checks;         ///< rank 1's flags
   std::vector<ModeEvidence> modes;         ///< every test mode of every setup
   double error_before_pct = std::numeric_limits<double>::quiet_NaN(), error_after_pct = error_before_pct;
