@@ -284,6 +284,11 @@ std::string RunSummary(const pipeline::RunResult& run, const nlohmann::json& his
       lines.push_back("  " + std::string(12, ' ') + " poles picked by hand (ema pick); to repeat without the browser: " +
                       "select = \"" + report::SelectText(r.fit_options.select_frequencies_hz) + "\" in its [[test]]");
   }
+  // What the agreement columns compare, when the tests carried sensors the model leaves out.
+  double sensor_mass_kg = 0.0;
+  for (const formats::ProjectTest& test : project.tests) sensor_mass_kg = std::max(sensor_mass_kg, test.sensor_mass);
+  if (const std::string note = report::AgreementBasisWords(sensor_mass_kg); !note.empty())
+    lines.push_back("  " + note);
   if (run.diagnosis) {
     // The diagnosis's first screen, as `ema diagnose` prints it.
     std::istringstream first_screen(DiagnosisSummary(*run.diagnosis));

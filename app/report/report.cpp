@@ -277,6 +277,11 @@ json BuildReportData(const ReportInput& input) {
     setups.push_back(std::move(s));
   }
   data["setups"] = std::move(setups);
+  // What the headline's agreement compares, when the tests carried sensors the model leaves out.
+  double sensor_mass_kg = 0.0;
+  for (const SetupResults& setup : input.setups) sensor_mass_kg = std::max(sensor_mass_kg, setup.sensor_mass_kg);
+  if (const std::string note = AgreementBasisWords(sensor_mass_kg); !note.empty())
+    data["agreement_note"] = note;
   return data;
 }
 
@@ -328,6 +333,7 @@ ReportInput ReportInputOf(const pipeline::RunResult& run, const RunPage& page) {
     SetupResults s;
     s.name = test.name;
     s.rehearsal = RehearsalWords(test);
+    s.sensor_mass_kg = test.sensor_mass;
     if (r.frf) s.frf_summary = formats::FrfSummaryJson(r.frf->result);
     if (r.fit && r.frfs) {
       s.stabilisation = pipeline::FitStabilisationJson(*r.fit, *r.frfs, run.FrfPath(t).string());

@@ -52,6 +52,7 @@ struct SetupResults {
   /// `ema fit` line, "modes_json": the modes file relative to the report}. Null: not shown.
   nlohmann::json selection;
   std::string rehearsal;               ///< a simulated test: report::RehearsalWords ("" measured)
+  double sensor_mass_kg = 0.0;         ///< the test's own sensors per measured node ([[test]] sensor_mass)
   double band_lo_hz = 0.0;             ///< fit band; 0/0 = the whole FRF range
   double band_hi_hz = 0.0;
 };

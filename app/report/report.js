@@ -138,6 +138,7 @@
         return [s.name, s.frf_count === undefined ? '–' : s.frf_count, (s.rejected || []).length,
           s.mode_count === undefined ? '–' : s.mode_count, agreeMac(s.correlation_before), agreeMac(s.correlation_after)];
       }), 'headline');
+      if (data.agreement_note) fs0.appendChild(el('p', { 'class': 'agreement-note', text: data.agreement_note }));
       data.setups.forEach(function (s) {  // a simulated test must never read as a measurement
         if (s.rehearsal) fs0.appendChild(el('p', { 'class': 'rehearsal', text: s.name + ': ' + s.rehearsal }));
       });

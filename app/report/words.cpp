@@ -80,6 +80,14 @@ std::string EffectValuesWords(const pipeline::EffectFinding& f) {
   return out + (out.empty() ? "" : "; ") + springs;
 }
 
+std::string AgreementBasisWords(double sensor_mass_kg) {
+  if (!(sensor_mass_kg > 0.0)) return "";
+  return "Agreement / MAC: the model as stated against the test, without the test's own sensors (" +
+         Significant(1e3 * sensor_mass_kg, 3) +
+         " g per measured node), as a validation table compares them; the diagnosis carries the sensors, so its "
+         "frequency errors are smaller.";
+}
+
 std::string ModelErrorLookAlikeWords(const pipeline::Findings& f) {
   if (!f.model_error_lookalike) return "";
   const pipeline::ModelErrorLookAlike& l = *f.model_error_lookalike;

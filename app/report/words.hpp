@@ -22,6 +22,13 @@ std::string SelectText(const std::vector<double>& frequencies_hz);
 /// rehearsal, not a measurement)"; "" for a measured test.
 std::string RehearsalWords(const formats::ProjectTest& test);
 
+/// What the agreement / MAC columns of a run's headline compare when its tests carried sensors
+/// (`[[test]] sensor_mass`, kg per measured node; the largest of the run's): the model as stated,
+/// without them, as a validation table does — while the diagnosis carries them, so its frequency
+/// errors are smaller (the guideway sample: 99.1 % agreement beside a 0.0004 % error). A whole
+/// sentence, "Agreement / MAC: …"; "" for 0.
+std::string AgreementBasisWords(double sensor_mass_kg);
+
 /// "12.3 %" of a probability in [0, 1].
 std::string Percent(double probability);
 

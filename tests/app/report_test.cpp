@@ -714,5 +714,26 @@ TEST(Report, ARehearsedTestSaysItWasSimulatedAndOnWhat) {
   EXPECT_EQ(RehearsalWords(rehearsed), "simulated from plan-stud-5um.toml on the project's model (a rehearsal, not a measurement)");
 }
 
+TEST(Report, TheHeadlineSaysItsAgreementLeavesTheTestsSensorsOut) {
+  // The guideway sample's updated model agrees to 99.1 % while the diagnosis leaves 0.0004 %: the
+  // agreement compares the model without the test's sensors, the diagnosis carries them. With
+  // sensors on any test the page says so once, with the largest mass; without, nothing.
+  pipeline::RunResult run;
+  formats::ProjectTest light, heavy;
+  light.name = "stud-5um";
+  light.sensor_mass = 0.0052;
+  heavy.name = "stud-9um";
+  heavy.sensor_mass = 0.0112;
+  run.plan.project.tests = {light, heavy};
+  run.tests.resize(2);
+  const nlohmann::json data = BuildReportData(ReportInputOf(run, RunPage{}));
+  EXPECT_EQ(data["agreement_note"],
+            "Agreement / MAC: the model as stated against the test, without the test's own sensors (11.2 g per "
+            "measured node), as a validation table compares them; the diagnosis carries the sensors, so its "
+            "frequency errors are smaller.");
+  run.plan.project.tests[0].sensor_mass = run.plan.project.tests[1].sensor_mass = 0.0;
+  EXPECT_FALSE(BuildReportData(ReportInputOf(run, RunPage{})).contains("agreement_note"));
+}
+
 }  // namespace
 }  // namespace ema::report
