@@ -313,6 +313,23 @@ def look_alikes(diag):
             and (c["rank"] == 1 or (c.get("probability") or 0.0) >= max(0.05 * p1, 0.001))]
 
 
+def test_dof_count(folder):
+    """The test DOFs nominal.toml offers a plan: three per point of a body, and per point on an FE
+    node the translations (ux, uy, uz) the FE model has there — one on the FE beams, whose nodes
+    carry uz and ry (counting three there asked `ema plan` for DOFs the model does not have)."""
+    with open(os.path.join(folder, "nominal.toml"), "rb") as f:
+        model = tomllib.load(f)
+    translations = {}
+    dofs_file = model.get("fe", {}).get("dofs")
+    if dofs_file:
+        with open(os.path.join(folder, dofs_file)) as f:
+            for line in f.read().splitlines()[1:]:
+                node, dof = (x.strip() for x in line.split(",")[:2])
+                if dof in ("ux", "uy", "uz"):
+                    translations[int(node)] = translations.get(int(node), 0) + 1
+    return sum(translations.get(p["node"], 0) if "node" in p else 3 for p in model.get("point", []))
+
+
 def replan(ema, case, folder, tests, lo, hi, times, index):
     """The follow-up test of a diagnosis that left look-alikes (issue 40): `ema plan --candidates
     diag.json --keep <the plan>` adds one roving set where the readings differ most, the truth is
@@ -327,8 +344,7 @@ def replan(ema, case, folder, tests, lo, hi, times, index):
     kept = f"plan-{tag}.toml"
     with open(os.path.join(folder, kept), "rb") as f:
         sets = [st["sensors"] for st in tomllib.load(f)["set"]]
-    with open(os.path.join(folder, "nominal.toml"), "rb") as f:
-        candidates = 3 * len(tomllib.load(f).get("point", []))
+    candidates = test_dof_count(folder)
     free = candidates - len({x for st in sets for x in st})
     per_set = min(REPLAN_SENSORS or (len(sets[0]) if sets else 8), free)
     if per_set < 1:

@@ -5,10 +5,12 @@ are Timoshenko's — checked against the closed-form tip deflection of a cantile
 import os
 import random
 import sys
+import tempfile
 import unittest
 
 sys.dont_write_bytecode = True  # no __pycache__ left in the source tree by the test
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import bench  # noqa: E402
 import cases  # noqa: E402
 
 
@@ -75,6 +77,18 @@ class FormCases(unittest.TestCase):
         self.assertAlmostEqual(kk[(1, 1)] - k0[(1, 1)], 5.0, places=6)
         self.assertEqual({k: v for k, v in kk.items() if k != (1, 1)}, {k: v for k, v in k0.items() if k != (1, 1)})
         self.assertGreater(mm[(1, 1)], m0[(1, 1)])
+
+    def test_replan_counts_the_dofs_the_model_has(self):
+        # The follow-up plan's free DOFs (bench.py replan): an FE beam's points carry uz only (its
+        # nodes: uz, ry), a body's point three translations.
+        with tempfile.TemporaryDirectory() as folder:
+            case = cases.make_case(0, 2026, 0, cases.FORM_FAMILY)
+            cases.write_case(case, folder)
+            self.assertEqual(bench.test_dof_count(folder), case["files"]["nominal.toml"].count("[[point]]"))
+            self.assertGreater(bench.test_dof_count(folder), 0)
+            with open(os.path.join(folder, "nominal.toml"), "w") as f:
+                f.write('[[point]]\nid = 1\nbody = "b"\nat = [0, 0, 0]\n\n[[point]]\nid = 2\nbody = "b"\nat = [1, 0, 0]\n')
+            self.assertEqual(bench.test_dof_count(folder), 6)
 
 
 if __name__ == "__main__":
