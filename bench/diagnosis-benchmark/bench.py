@@ -343,14 +343,18 @@ def replan(ema, case, folder, tests, lo, hi, times, index):
     tag = s or "test"
     kept = f"plan-{tag}.toml"
     with open(os.path.join(folder, kept), "rb") as f:
-        sets = [st["sensors"] for st in tomllib.load(f)["set"]]
+        kept_plan = tomllib.load(f)
+    sets = [st["sensors"] for st in kept_plan["set"]]
+    # The follow-up set uses the first test's sensors: `ema plan` gives a set it adds --sensor-mass
+    # (default 0), not the kept plan's.
+    sensor_mass = kept_plan.get("plan", {}).get("sensor_mass", 0.0)
     candidates = test_dof_count(folder)
     free = candidates - len({x for st in sets for x in st})
     per_set = min(REPLAN_SENSORS or (len(sets[0]) if sets else 8), free)
     if per_set < 1:
         return {"readings": [f"{c['kind']} on {c['target']}" for c in readings], "skipped": "every DOF already measured"}
     args = ["plan", "nominal.toml", "--candidates", "diag.json", "--keep", kept, "--sensors", str(per_set),
-            "--band", f"{lo:.3f}:{hi:.3f}", "-o", "replan.toml", "--json", "replan.json"]
+            "--band", f"{lo:.3f}:{hi:.3f}", "--sensor-mass", repr(sensor_mass), "-o", "replan.toml", "--json", "replan.json"]
     times["replan"] = run_ema(ema, args, folder, "replan.log")
     with open(os.path.join(folder, "replan.toml")) as f:
         text = f.read()
