@@ -315,8 +315,9 @@ def look_alikes(diag):
 
 def test_dof_count(folder):
     """The test DOFs nominal.toml offers a plan: three per point of a body, and per point on an FE
-    node the translations (ux, uy, uz) the FE model has there — one on the FE beams, whose nodes
-    carry uz and ry (counting three there asked `ema plan` for DOFs the model does not have)."""
+    node the translations (ux, uy, uz or 1, 2, 3) the FE model has there — one on the FE beams,
+    whose nodes carry uz and ry (counting three there asked `ema plan` for DOFs the model does not
+    have), three on the look-alike family's frames (six DOFs per node, numbered)."""
     with open(os.path.join(folder, "nominal.toml"), "rb") as f:
         model = tomllib.load(f)
     translations = {}
@@ -325,7 +326,7 @@ def test_dof_count(folder):
         with open(os.path.join(folder, dofs_file)) as f:
             for line in f.read().splitlines()[1:]:
                 node, dof = (x.strip() for x in line.split(",")[:2])
-                if dof in ("ux", "uy", "uz"):
+                if dof in ("ux", "uy", "uz", "1", "2", "3"):  # the model file's names or numbers 1..6
                     translations[int(node)] = translations.get(int(node), 0) + 1
     return sum(translations.get(p["node"], 0) if "node" in p else 3 for p in model.get("point", []))
 

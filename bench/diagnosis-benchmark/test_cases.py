@@ -80,12 +80,17 @@ class FormCases(unittest.TestCase):
 
     def test_replan_counts_the_dofs_the_model_has(self):
         # The follow-up plan's free DOFs (bench.py replan): an FE beam's points carry uz only (its
-        # nodes: uz, ry), a body's point three translations.
+        # nodes: uz, ry), a frame's (DOFs 1..6) and a body's point three translations.
         with tempfile.TemporaryDirectory() as folder:
             case = cases.make_case(0, 2026, 0, cases.FORM_FAMILY)
             cases.write_case(case, folder)
             self.assertEqual(bench.test_dof_count(folder), case["files"]["nominal.toml"].count("[[point]]"))
             self.assertGreater(bench.test_dof_count(folder), 0)
+            # The look-alike family's frame: six DOFs per node, numbered 1..6, three of them translations.
+            frame = cases.make_case(0, 2026, 0, cases.LOOKALIKE_FAMILY)
+            with tempfile.TemporaryDirectory() as frame_folder:
+                cases.write_case(frame, frame_folder)
+                self.assertEqual(bench.test_dof_count(frame_folder), 3 * frame["files"]["nominal.toml"].count("[[point]]"))
             with open(os.path.join(folder, "nominal.toml"), "w") as f:
                 f.write('[[point]]\nid = 1\nbody = "b"\nat = [0, 0, 0]\n\n[[point]]\nid = 2\nbody = "b"\nat = [1, 0, 0]\n')
             self.assertEqual(bench.test_dof_count(folder), 6)
