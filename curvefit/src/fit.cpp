@@ -360,7 +360,9 @@ FitResult FitPreparedData(const FitData& data, const FitOptions& options, const 
           ApplyPerSet(per, &result);
         } else {
           have_ml = RefineSelected(data, options, source, &result, &ml, modes_progress);
-          if (!per.why.empty() && result.refine.IsSolutionUsable())
+          // Why the sets did not get poles of their own, also when the one-pole refinement that
+          // replaced it was not usable either (its own warning says that much, not this).
+          if (!per.why.empty())
             result.warnings.push_back(source + ": one pole per mode for every roving set (" + per.why + ")");
         }
         const double t_lsfd = ThreadCpuSeconds();
