@@ -208,18 +208,16 @@ std::string app::DiagnosisSummary(const pipeline::DiagnoseStage& stage) {
   };
   if (f.model_inadequate) InadequateModelWords(d, f, &out);
   if (f.effects.empty()) {
-    if (f.model_inadequate && f.model_error_lookalike)
-      // Inside the vocabulary after all: a reading the model's own error also explains.
-      out << "Diagnosis: no effect the model can try explains the mismatch beyond the model's own error (the model "
-             "as given ranks first, probability "
-          << Percent(f.rank_one_probability) << ")" << report::ModelErrorLookAlikeWords(f) << "\n";
-    else if (f.model_inadequate)
+    if (f.model_inadequate) {
       // Not "nothing is missing": something is, but none of the vocabulary's effects explains it
-      // beyond the model's own error.
+      // beyond the model's own error — outside the vocabulary, unless a reading the model's error
+      // also explains is inside it after all (Findings::model_error_lookalike).
+      const std::string alike = report::ModelErrorLookAlikeWords(f);
       out << "Diagnosis: no effect the model can try explains the mismatch beyond the model's own error (the model "
              "as given ranks first, probability "
-          << Percent(f.rank_one_probability) << "); what is missing is outside the vocabulary.\n";
-    else
+          << Percent(f.rank_one_probability) << ")"
+          << (alike.empty() ? std::string("; what is missing is outside the vocabulary.") : alike) << "\n";
+    } else
       out << "Diagnosis: no missing effect found (probability " << Percent(f.rank_one_probability)
           << "): no candidate explains the mismatch by more than its prior and parameter cost.\n";
     out << "  Mean frequency error " << FixedPoint(f.error_after_pct, 2) << " %, mean MAC " << FixedPoint(f.mac_after, 3)

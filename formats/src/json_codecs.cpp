@@ -411,10 +411,7 @@ json CandidateJson(const diagnose::Candidate& c) {
   if (c.reduced_model) out["reduced_model"] = true;
   // cli.md, added turn 4: the model's own error inferred with this candidate, and the effects
   // whose value lies beyond 3σ of the stated uncertainty.
-  out["model_error"] = {{"frequency_rel", NumberOrNull(c.model_error.frequency_rel)},
-                        {"shape", NumberOrNull(c.model_error.shape)},
-                        {"frequency_common_rel", NumberOrNull(c.model_error.frequency_common_rel)},
-                        {"dominates", c.model_error.dominates}};
+  out["model_error"] = ModelErrorJson(c.model_error);
   out["outside_stated"] = json::array();
   for (const auto& p : c.parameters)
     if (p.outside_prior)
@@ -437,6 +434,13 @@ json CandidateJson(const diagnose::Candidate& c) {
 }
 
 }  // namespace
+
+json ModelErrorJson(const diagnose::ModelError& error) {
+  return {{"frequency_rel", NumberOrNull(error.frequency_rel)},
+          {"shape", NumberOrNull(error.shape)},
+          {"frequency_common_rel", NumberOrNull(error.frequency_common_rel)},
+          {"dominates", error.dominates}};
+}
 
 json DiagnosisJson(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions& options) {
   json out;

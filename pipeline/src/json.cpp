@@ -68,11 +68,7 @@ json DiagnosisJson(const DiagnoseStage& stage) {
                                     {"description", l->description},
                                     {"probability", l->probability},
                                     {"mean_abs_frequency_error_pct", NumberOrNull(l->error_after_pct)},
-                                    {"model_error",
-                                     {{"frequency_rel", NumberOrNull(l->model_error.frequency_rel)},
-                                      {"frequency_common_rel", NumberOrNull(l->model_error.frequency_common_rel)},
-                                      {"shape", NumberOrNull(l->model_error.shape)},
-                                      {"dominates", l->model_error.dominates}}}};
+                                    {"model_error", formats::ModelErrorJson(l->model_error)}};
   if (stage.nonlinearity) {
     json nonlinearity = formats::AmplitudeJson(*stage.nonlinearity);
     bool flagged = false;

@@ -82,6 +82,10 @@ nlohmann::json ModelSolutionJson(const model::Model& model, const model::Solutio
 /// One [[effect]] of a candidate: kind, target, parameters, law (TOML inline table).
 nlohmann::json EffectJson(const model::Effect& effect);
 
+/// The model's own error inferred with a reading (cli.md "added turn 4" `model_error`):
+/// frequency_rel, shape, frequency_common_rel, dominates.
+nlohmann::json ModelErrorJson(const diagnose::ModelError& error);
+
 /// `ema diagnose --json` without "modes" and "nonlinearity" (DiagnosisModeRows; the amplitude
 /// analysis): baseline, candidates, criterion, the effective options, counts, explanation,
 /// effect probabilities and the steps.
