@@ -100,6 +100,69 @@ std::vector<int> AverageLinkage(const std::vector<const Pole*>& items, double cu
   return id;
 }
 
+/// Joins the clusters that are fragments of one column: a column whose pole vector or frequency
+/// drifts along the orders by more than the cut-off (a mode that roving sets, loading the
+/// structure with their sensors differently, see at slightly different frequencies: each order's
+/// shape is a different blend of the sets' poles) is cut by the average linkage into pieces each
+/// too short to count. A mode appears once per order, so clusters that never share an order and
+/// whose median frequencies lie within `frequency_tol` are one column; pairs are joined nearest
+/// first while the joined clusters still share no order. Two close modes are seen at the same
+/// orders and stay apart.
+void JoinColumnFragments(std::vector<std::vector<const Pole*>>* clusters, double frequency_tol) {
+  if (!(frequency_tol > 0.0) || clusters->size() < 2) return;
+  const int c = static_cast<int>(clusters->size());
+  std::vector<double> median(c);
+  int max_order = 0;
+  for (int i = 0; i < c; ++i) {
+    std::vector<double> f;
+    for (const Pole* p : (*clusters)[i]) f.push_back(p->frequency_hz), max_order = std::max(max_order, p->order);
+    median[i] = Quantile(f, 0.5);
+  }
+  std::vector<std::vector<char>> orders(c, std::vector<char>(static_cast<size_t>(max_order) + 1, 0));
+  for (int i = 0; i < c; ++i)
+    for (const Pole* p : (*clusters)[i]) orders[i][static_cast<size_t>(std::max(p->order, 0))] = 1;
+  struct Pair {
+    double d;
+    int i, j;
+  };
+  std::vector<int> by_frequency(c);
+  std::iota(by_frequency.begin(), by_frequency.end(), 0);
+  std::sort(by_frequency.begin(), by_frequency.end(), [&](int a, int b) { return median[a] < median[b]; });
+  std::vector<Pair> pairs;
+  for (int a = 0; a < c; ++a)
+    for (int b = a + 1; b < c; ++b) {
+      const int i = by_frequency[a], j = by_frequency[b];
+      const double d = (median[j] - median[i]) / std::max(median[j], 1e-300);
+      if (!(d <= frequency_tol)) break;  // sorted: every later one is farther
+      pairs.push_back({d, i, j});
+    }
+  std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.d < y.d; });
+  std::vector<int> root(c);
+  std::iota(root.begin(), root.end(), 0);
+  auto find = [&](int x) {
+    while (root[x] != x) x = root[x] = root[root[x]];
+    return x;
+  };
+  for (const Pair& pr : pairs) {
+    const int a = find(pr.i), b = find(pr.j);
+    if (a == b) continue;
+    bool shared = false;
+    for (size_t o = 0; o < orders[a].size() && !shared; ++o) shared = orders[a][o] && orders[b][o];
+    if (shared) continue;
+    for (size_t o = 0; o < orders[a].size(); ++o) orders[a][o] |= orders[b][o];
+    root[b] = a;
+  }
+  std::vector<std::vector<const Pole*>> joined;
+  std::vector<int> slot(c, -1);
+  for (int i = 0; i < c; ++i) {
+    const int r = find(i);
+    if (slot[r] < 0) slot[r] = static_cast<int>(joined.size()), joined.emplace_back();
+    auto& to = joined[static_cast<size_t>(slot[r])];
+    to.insert(to.end(), (*clusters)[i].begin(), (*clusters)[i].end());
+  }
+  *clusters = std::move(joined);
+}
+
 }  // namespace
 
 void ClassifyStability(StabilisationDiagram* diagram, const StabilityOptions& options) {
@@ -183,6 +246,8 @@ std::vector<SelectedPole> SelectPolesAuto(const StabilisationDiagram& diagram, c
     }
     start = k;
   }
+
+  JoinColumnFragments(&clusters, options.fragment_frequency_tol);
 
   const int n_orders = static_cast<int>(diagram.orders.size());
   const int min_size = std::max(options.min_orders, static_cast<int>(std::ceil(options.min_span_fraction * n_orders)));

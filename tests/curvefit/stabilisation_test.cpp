@@ -144,7 +144,8 @@ TEST(SelectPolesAuto, ClosePairSplitOrMergedByTheirVectors) {
 
 // A column that drifts by 0.6 % between orders 10 and 11 (the estimate jumps when the model
 // gains a pole elsewhere): two clusters, one ending where the other begins, count once — by the
-// upper (converged) part.
+// upper (converged) part: so when the fragments are not joined first, and when they are (one
+// cluster over both parts, orders 2..24, its representative from the upper half).
 TEST(SelectPolesAuto, ColumnCutByADriftCountsOnceByItsUpperPart) {
   const Eigen::VectorXcd v = Vec(1.0, 0.4);
   StabilisationDiagram d = Diagram(24);
@@ -153,10 +154,42 @@ TEST(SelectPolesAuto, ColumnCutByADriftCountsOnceByItsUpperPart) {
   AutoSelectOptions o;
   o.cutoff = 0.003;  // below the jump: the two parts are separate clusters
   o.min_span_fraction = 0.0;
-  const std::vector<SelectedPole> sel = SelectPolesAuto(d, o);
+  AutoSelectOptions unjoined = o;
+  unjoined.fragment_frequency_tol = 0.0;
+  const std::vector<SelectedPole> sel = SelectPolesAuto(d, unjoined);
   ASSERT_EQ(sel.size(), 1u);
   EXPECT_NEAR(sel[0].pole.frequency_hz, 60.36, 1e-9);
   EXPECT_EQ(sel[0].first_order, 11);  // order 11 matched order 10 across the jump ('s' at 0.6 %)
+  const std::vector<SelectedPole> joined = SelectPolesAuto(d, o);
+  ASSERT_EQ(joined.size(), 1u);
+  EXPECT_NEAR(joined[0].pole.frequency_hz, 60.36, 1e-9);
+  EXPECT_EQ(joined[0].first_order, 2);
+  EXPECT_EQ(joined[0].cluster_size, 23);
+}
+
+// A column whose vector turns slowly along the orders (1 − MAC ≈ 4e-4 from one order to the next,
+// 0.25 from the first to the last: what a mode looks like when two roving sets see it at slightly
+// different frequencies) is cut by a tight cut-off into fragments of a few orders, each shorter
+// than the span test: joined, it is one mode. A close mode 0.4 % above, seen at the same orders with
+// a vector of its own, shares orders with it and stays apart.
+TEST(SelectPolesAuto, FragmentsOfAColumnWhoseVectorTurnsAreJoined) {
+  StabilisationDiagram d = Diagram(30);
+  for (int p = 1; p <= 30; ++p) {
+    d.orders[p - 1].push_back(MakePole(p, 100.0, 0.01, Vec(1.0, 0.02 * p)));
+    d.orders[p - 1].push_back(MakePole(p, 100.4, 0.01, Vec(-0.02 * p, 1.0)));
+  }
+  ClassifyStability(&d);
+  AutoSelectOptions o;
+  o.cutoff = 0.005;  // what the data-driven cut-off is on clean data
+  AutoSelectOptions unjoined = o;
+  unjoined.fragment_frequency_tol = 0.0;
+  EXPECT_TRUE(SelectPolesAuto(d, unjoined).empty()) << "every fragment is shorter than 30 % of the orders";
+  const std::vector<SelectedPole> sel = SelectPolesAuto(d, o);
+  ASSERT_EQ(sel.size(), 2u);
+  EXPECT_NEAR(sel[0].pole.frequency_hz, 100.0, 1e-9);
+  EXPECT_NEAR(sel[1].pole.frequency_hz, 100.4, 1e-9);
+  EXPECT_EQ(sel[0].cluster_size, 29);  // orders 2..30 ('s'; order 1 has nothing to match)
+  EXPECT_EQ(sel[1].cluster_size, 29);
 }
 
 // A narrow band (40 lines, 6 orders) whose one mode's damping moves by 10 % per order, as low

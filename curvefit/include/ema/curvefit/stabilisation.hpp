@@ -40,6 +40,10 @@ struct AutoSelectOptions {
   /// A cluster must span at least max(min_orders, min_span_fraction × orders scanned) orders.
   int min_orders = 4;
   double min_span_fraction = 0.3;
+  /// Clusters that never share an order and whose median frequencies differ by at most this
+  /// (relative) are fragments of one column and are joined before the span test (a mode whose
+  /// vector drifts along the orders, e.g. seen by roving sets that load it differently). <= 0: off.
+  double fragment_frequency_tol = 0.01;
 };
 
 /// Fully automatic selection: hierarchical (average-linkage) clustering of the stable poles
