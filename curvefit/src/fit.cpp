@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 namespace ema::curvefit {
@@ -272,7 +273,10 @@ int FindSplitPole(const FitData& data, const std::vector<SelectedPole>& selected
       const int weak = energy_a < energy_b ? a : b, strong = weak == a ? b : a;
       std::ostringstream why;
       why.precision(3);
-      why << "same mode as the one at " << selected[strong].pole.frequency_hz << " Hz seen on other outputs ("
+      // The kept pole's frequency as the note gives the dropped one's (two decimals): "473 Hz" and
+      // "1.05e+03 Hz" beside "1059.42 Hz" read as another mode.
+      why << std::fixed << std::setprecision(2) << "same mode as the one at " << selected[strong].pole.frequency_hz
+          << std::defaultfloat << std::setprecision(3) << " Hz seen on other outputs ("
           << (m >= 2 ? "participation MAC " : "") ;
       if (m >= 2) why << part_mac << ", ";
       why << "shape overlap " << overlap
@@ -284,6 +288,73 @@ int FindSplitPole(const FitData& data, const std::vector<SelectedPole>& selected
       return weak;
     }
   return -1;
+}
+
+// The poles FitPreparedData drops when a roving test's sets could not be refined with poles of
+// their own. The pairs of poles closer than a set's refined pole can move (|Δf| < 2 (ζa fa + ζb fb):
+// the refinement keeps a pole within 2 half-power bandwidths of its start), closest first and each
+// pole in one pair at most, are candidates: the weaker of
+// each pair (smaller residue energy) dropped — all of them, else all but the farthest pair, ... (at
+// most kMaxSetSplitTries refinements of every set) — when every set's refinement is then usable.
+// Indices into `selected`, highest first (erase in that order); empty when no such drop works.
+std::vector<int> FindSetSplitPoles(const FitData& data, const FitOptions& options,
+                                   const std::vector<SelectedPole>& selected, const LsfdResult& lsfd,
+                                   std::vector<DroppedPole>* dropped, const ProgressCallback& progress) {
+  constexpr int kMaxSetSplitTries = 4;
+  constexpr double kReach = 2.0;  // |Δf| / (ζa fa + ζb fb) a set's pole can bridge
+  struct Pair {
+    double closeness;  // |Δf| over ζa fa + ζb fb
+    int a, b;
+  };
+  std::vector<Pair> pairs;
+  const int n = static_cast<int>(selected.size());
+  if (lsfd.residues.cols() < n) return {};
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      const Pole& pa = selected[a].pole;
+      const Pole& pb = selected[b].pole;
+      const double band = pa.damping_ratio * pa.frequency_hz + pb.damping_ratio * pb.frequency_hz;
+      if (!(band > 0.0)) continue;
+      const double closeness = std::abs(pa.frequency_hz - pb.frequency_hz) / band;
+      if (closeness < kReach) pairs.push_back({closeness, a, b});
+    }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.closeness < y.closeness; });
+  std::vector<char> used(static_cast<size_t>(n), 0);
+  std::vector<Pair> disjoint;
+  for (const Pair& pr : pairs)
+    if (!used[pr.a] && !used[pr.b]) used[pr.a] = used[pr.b] = 1, disjoint.push_back(pr);
+  for (int tries = 0; tries < kMaxSetSplitTries && !disjoint.empty(); ++tries, disjoint.pop_back()) {
+    std::vector<int> weak, strong;
+    for (const Pair& pr : disjoint) {
+      const bool a_weaker = lsfd.residues.col(pr.a).squaredNorm() < lsfd.residues.col(pr.b).squaredNorm();
+      weak.push_back(a_weaker ? pr.a : pr.b);
+      strong.push_back(a_weaker ? pr.b : pr.a);
+    }
+    std::vector<SelectedPole> fewer;
+    for (int k = 0; k < n; ++k)
+      if (std::find(weak.begin(), weak.end(), k) == weak.end()) fewer.push_back(selected[k]);
+    const PerSetRefinement per = RefinePerSet(data, options, fewer, progress);
+    if (!per.ok) continue;
+    double chi2 = 0.0;
+    for (const auto& r : per.sets) chi2 = std::max(chi2, r.summary.reduced_chi2);
+    for (size_t k = 0; k < weak.size(); ++k) {
+      std::ostringstream why;
+      why << std::fixed << std::setprecision(2) << "same mode as the one at " << selected[strong[k]].pole.frequency_hz
+          << std::defaultfloat << std::setprecision(3)
+          << " Hz, within two half-power bandwidths of it: the roving sets see it at slightly different frequencies; "
+             "with one pole for both every set's own refinement fits (largest reduced chi2 "
+          << chi2 << "), with two it did not";
+      DroppedPole d;
+      d.frequency_hz = selected[weak[k]].pole.frequency_hz;
+      d.damping_ratio = selected[weak[k]].pole.damping_ratio;
+      d.merged_into_hz = selected[strong[k]].pole.frequency_hz;
+      d.reason = why.str();
+      dropped->push_back(std::move(d));
+    }
+    std::sort(weak.rbegin(), weak.rend());
+    return weak;
+  }
+  return {};
 }
 
 }  // namespace
@@ -380,6 +451,22 @@ FitResult FitPreparedData(const FitData& data, const FitOptions& options, const 
             // Handled here (the mode is fitted as one pole): a note in `dropped`, not a warning.
             result.dropped.push_back(dropped);
             result.selected.erase(result.selected.begin() + drop);
+            continue;
+          }
+        }
+        // Automatic selection, roving sets whose own refinement failed: two poles within reach of
+        // each other's half-power band may be one mode the sets see at slightly different frequencies
+        // (each set's sensors load it differently), too close for their shapes to fall apart by
+        // outputs as above. The weaker of each such pair is dropped when, with one pole
+        // for both, every set's own refinement becomes usable: the data then say it was one mode (every
+        // such pair at once: a light structure's sets split each of its modes).
+        if (options.select_frequencies_hz.empty() && options.split_poles.enabled && !per.ok && !per.why.empty()) {
+          std::vector<DroppedPole> dropped;
+          const std::vector<int> drops = FindSetSplitPoles(data, options, result.selected, lsfd, &dropped, modes_progress);
+          if (!drops.empty()) {
+            result.warnings.resize(warnings_before);
+            result.dropped.insert(result.dropped.end(), dropped.begin(), dropped.end());
+            for (int k : drops) result.selected.erase(result.selected.begin() + k);  // highest index first
             continue;
           }
         }
