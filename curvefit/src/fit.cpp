@@ -92,9 +92,12 @@ bool RefineSelected(const FitData& data, const FitOptions& options, const std::s
 // over the sets.
 struct PerSetRefinement {
   bool ok = false;
+  /// Every set's refined poles stayed in place (MlRefineSummary::poles_plausible), whether or not
+  /// the misfit test accepted them.
+  bool poles_plausible = false;
   std::vector<MlRefineResult> sets;
   SetPoles poles;
-  std::string why;  ///< when not usable
+  std::string why;  ///< when not usable: the first set that was not
 };
 
 PerSetRefinement RefinePerSet(const FitData& data, const FitOptions& options, const std::vector<SelectedPole>& selected,
@@ -105,6 +108,9 @@ PerSetRefinement RefinePerSet(const FitData& data, const FitOptions& options, co
   MlRefineOptions mo = options.ml;
   mo.lower_residual = options.lsfd.lower_residual;
   mo.upper_residual = options.lsfd.upper_residual;
+  // A set rejected only for its misfit does not end the loop: whether the other sets' poles stay in
+  // place is what FindSetSplitPoles asks.
+  out.poles_plausible = true;
   for (size_t k = 0; k < sets.size(); ++k) {
     MlRefineResult r;
     ProgressCallback set_progress;  // set k of K: (k + its share) / K
@@ -115,19 +121,23 @@ PerSetRefinement RefinePerSet(const FitData& data, const FitOptions& options, co
     try {
       r = RefineModalModel(SubsetOutputs(data, sets[k]), selected, mo, set_progress);
     } catch (const InputError& e) {
-      out.why = "roving set " + std::to_string(k + 1) + ": " + e.what();
+      if (out.why.empty()) out.why = "roving set " + std::to_string(k + 1) + ": " + e.what();
+      out.poles_plausible = false;
       return out;
     }
     if (!r.summary.IsSolutionUsable()) {
-      out.why = "roving set " + std::to_string(k + 1) + ": " + r.summary.BriefReport();
-      return out;
+      if (out.why.empty()) out.why = "roving set " + std::to_string(k + 1) + ": " + r.summary.BriefReport();
+      if (!r.summary.poles_plausible) {
+        out.poles_plausible = false;
+        return out;
+      }
     }
     out.poles.outputs.push_back(sets[k]);
     out.poles.lambda_fitted.emplace_back();
     for (const RefinedPole& p : r.poles) out.poles.lambda_fitted.back().push_back(p.lambda_fitted);
     out.sets.push_back(std::move(r));
   }
-  out.ok = true;
+  out.ok = out.why.empty();
   return out;
 }
 
@@ -295,11 +305,14 @@ int FindSplitPole(const FitData& data, const std::vector<SelectedPole>& selected
 // the refinement keeps a pole within 2 half-power bandwidths of its start), closest first and each
 // pole in one pair at most, are candidates: the weaker of
 // each pair (smaller residue energy) dropped — all of them, else all but the farthest pair, ... (at
-// most kMaxSetSplitTries refinements of every set) — when every set's refinement is then usable.
+// most kMaxSetSplitTries refinements of every set) — when every set's refinement is then usable,
+// or when every set's refined poles then stay in place where with all poles (`with_all`) one did
+// not (a band whose misfit rejects every refinement, the one-set test's as well).
 // Indices into `selected`, highest first (erase in that order); empty when no such drop works.
 std::vector<int> FindSetSplitPoles(const FitData& data, const FitOptions& options,
                                    const std::vector<SelectedPole>& selected, const LsfdResult& lsfd,
-                                   std::vector<DroppedPole>* dropped, const ProgressCallback& progress) {
+                                   const PerSetRefinement& with_all, std::vector<DroppedPole>* dropped,
+                                   const ProgressCallback& progress) {
   constexpr int kMaxSetSplitTries = 4;
   constexpr double kReach = 2.0;  // |Δf| / (ζa fa + ζb fb) a set's pole can bridge
   struct Pair {
@@ -308,7 +321,9 @@ std::vector<int> FindSetSplitPoles(const FitData& data, const FitOptions& option
   };
   std::vector<Pair> pairs;
   const int n = static_cast<int>(selected.size());
-  if (lsfd.residues.cols() < n) return {};
+  // Twins pull each other's refined poles away; sets whose poles all stayed in place failed for
+  // something no drop repairs.
+  if (lsfd.residues.cols() < n || with_all.poles_plausible) return {};
   for (int a = 0; a < n; ++a)
     for (int b = a + 1; b < n; ++b) {
       const Pole& pa = selected[a].pole;
@@ -334,16 +349,23 @@ std::vector<int> FindSetSplitPoles(const FitData& data, const FitOptions& option
     for (int k = 0; k < n; ++k)
       if (std::find(weak.begin(), weak.end(), k) == weak.end()) fewer.push_back(selected[k]);
     const PerSetRefinement per = RefinePerSet(data, options, fewer, progress);
-    if (!per.ok) continue;
+    // Usable; or — where a band's misfit rejects every refinement, the one-set test's too (leakage
+    // of a long decay) — every set's poles now stay in place where with the twins one was pulled.
+    const bool in_place = !per.ok && per.poles_plausible;
+    if (!per.ok && !in_place) continue;
     double chi2 = 0.0;
     for (const auto& r : per.sets) chi2 = std::max(chi2, r.summary.reduced_chi2);
     for (size_t k = 0; k < weak.size(); ++k) {
       std::ostringstream why;
       why << std::fixed << std::setprecision(2) << "same mode as the one at " << selected[strong[k]].pole.frequency_hz
           << std::defaultfloat << std::setprecision(3)
-          << " Hz, within two half-power bandwidths of it: the roving sets see it at slightly different frequencies; "
-             "with one pole for both every set's own refinement fits (largest reduced chi2 "
-          << chi2 << "), with two it did not";
+          << " Hz, within two half-power bandwidths of it: the roving sets see it at slightly different frequencies; ";
+      if (per.ok)
+        why << "with one pole for both every set's own refinement fits (largest reduced chi2 " << chi2
+            << "), with two it did not";
+      else
+        why << "with one pole for both every set's refined poles stay in place (largest reduced chi2 " << chi2
+            << ", the band's misfit), with two one was pulled towards its twin";
       DroppedPole d;
       d.frequency_hz = selected[weak[k]].pole.frequency_hz;
       d.damping_ratio = selected[weak[k]].pole.damping_ratio;
@@ -462,7 +484,8 @@ FitResult FitPreparedData(const FitData& data, const FitOptions& options, const 
         // such pair at once: a light structure's sets split each of its modes).
         if (options.select_frequencies_hz.empty() && options.split_poles.enabled && !per.ok && !per.why.empty()) {
           std::vector<DroppedPole> dropped;
-          const std::vector<int> drops = FindSetSplitPoles(data, options, result.selected, lsfd, &dropped, modes_progress);
+          const std::vector<int> drops =
+              FindSetSplitPoles(data, options, result.selected, lsfd, per, &dropped, modes_progress);
           if (!drops.empty()) {
             result.warnings.resize(warnings_before);
             result.dropped.insert(result.dropped.end(), dropped.begin(), dropped.end());

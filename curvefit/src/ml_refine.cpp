@@ -624,6 +624,7 @@ MlRefineResult RefineModalModel(const FitData& data, const std::vector<SelectedP
              << " half-power bandwidths";
     }
   }
+  result.summary.poles_plausible = plausible;
   if (plausible && coherence && !options.estimate_only) {
     const double dof_ = 2.0 * pr.n * n_frf - (static_cast<double>(pr.p) * n_frf + 2.0 * nm);
     const double chi2 = dof_ > 0 ? outcome.final_cost / dof_ : kNaN;

@@ -116,6 +116,10 @@ struct MlRefineSummary {
   double reduced_chi2 = kNaN;     ///< final_cost / (residuals - parameters); ~1 when the noise model fits
   double seconds = 0.0;           ///< CPU time of the calling thread
   bool uncertainty_only = false;  ///< MlRefineOptions::estimate_only: the poles were kept, only σ computed
+  /// Every refined pole stayed stable and inside its neighbourhood: true when the result is usable
+  /// and when only the misfit test rejected it (the poles then say nothing wrong, the data's
+  /// misfit does), false when a pole was pulled away or the solve failed.
+  bool poles_plausible = false;
 
   std::string BriefReport() const;
   bool IsSolutionUsable() const {
