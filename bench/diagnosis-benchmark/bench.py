@@ -363,13 +363,15 @@ def replan(ema, case, folder, tests, lo, hi, times, index):
     with open(os.path.join(folder, "replan.toml"), "w") as f:
         f.write(text)
     sflag = ["--setup", s] if s else []
+    # --replan-together: the first test and the follow-up diagnosed as two tests of the one setup.
+    diagnosed = ([tests[0][1]] if REPLAN_TOGETHER else []) + ["modes-replan.unv"]
+    test_args = [a for modes in diagnosed for a in ("--test", f"{s}={modes}" if s else modes)]
     for step, args in (("simulate", ["simulate", "simulate.toml", "--plan", "replan.toml", "-o", "time-replan.unv",
                                      "--binary"] + sflag),
                        ("frf", ["frf", "time-replan.unv", "-o", "frf-replan.unv"]),
                        ("fit", ["fit", "frf-replan.unv", "-o", "modes-replan.unv", "--band", f"{lo:.3f}:{hi:.3f}",
                                 "--json", "modes-replan.json"]),
-                       ("diagnose", ["diagnose", "nominal.toml", "--test", f"{s}=modes-replan.unv" if s else "modes-replan.unv",
-                                     "--json", "diag-replan.json"])):
+                       ("diagnose", ["diagnose", "nominal.toml"] + test_args + ["--json", "diag-replan.json"])):
         times[step + "_replan"] = run_ema(ema, args, folder, f"{step}-replan.log")
     after = read_json(os.path.join(folder, "diag-replan.json"))
     plan = read_json(os.path.join(folder, "replan.json"))
@@ -492,13 +494,15 @@ def parse_range(text):
 DIAGNOSE_ARGS = []
 REUSE_TESTS = False
 REPLAN_SENSORS = 0  # --replan-sensors: the follow-up set's DOFs (0: as many as the first set)
+REPLAN_TOGETHER = False  # --replan-together: diagnose the first test and the follow-up together
 
 
 def run_range(args):
-    global REUSE_TESTS, REPLAN_SENSORS
+    global REUSE_TESTS, REPLAN_SENSORS, REPLAN_TOGETHER
     DIAGNOSE_ARGS[:] = getattr(args, "diagnose_arg", None) or []
     REUSE_TESTS = getattr(args, "reuse", False)
     REPLAN_SENSORS = getattr(args, "replan_sensors", 0) or 0
+    REPLAN_TOGETHER = getattr(args, "replan_together", False)
     if not (os.path.isfile(args.ema) and os.access(args.ema, os.X_OK)):
         print(f"bench.py: the ema executable is missing or not executable: {args.ema}", file=sys.stderr)
         sys.exit(2)
@@ -550,6 +554,9 @@ def main():
                             "test again and diagnose (docs/plan.md)")
         q.add_argument("--replan-sensors", type=int, default=0,
                        help="DOFs of the follow-up set (default: as many as the first test's first set)")
+        q.add_argument("--replan-together", action="store_true",
+                       help="with --replan: diagnose the first test and the follow-up together (two tests of one "
+                            "setup) instead of the follow-up alone")
         q.add_argument("--diagnose-arg", action="append", default=[],
                        help="an extra `ema diagnose` argument (repeat for several: --diagnose-arg=--shape-residual "
                             "--diagnose-arg=mac)")

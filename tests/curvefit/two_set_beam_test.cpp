@@ -125,10 +125,11 @@ TEST(TwoSetBeam, OneModeSeenAsTwoClosePolesIsFittedAsOne) {
 }
 
 // The same light-sensor test with records of 0.5 s (2048 samples): the 46 Hz mode has not decayed,
-// the leakage leaves a misfit no modal model removes, and every refinement is rejected for it — so
-// no drop can make the sets' refinement usable. The twins still pull a set's pole against its
+// the leakage leaves a misfit no modal model removes, and the misfit test rejects every refinement
+// — so no drop can make the sets' refinement pass it. The twins still pull a set's pole against its
 // neighbour's edge; with one dropped every set's poles stay in place, and that decides (before: 7
-// modes, 788 Hz twice).
+// modes, 788 Hz twice). Then each set keeps the poles it saw, the misfit said (before: one pole per
+// mode, the PolyMAX pole of one set, while the sets see the modes 0.1–0.9 % apart).
 TEST(TwoSetBeam, TwinPolesAreDroppedAlsoWhereTheBandsMisfitRejectsEveryRefinement) {
   const fs::path data = fs::path(EMA_SOURCE_DIR) / "tests/curvefit/data/two-set-beam";
   const fs::path tmp = fs::path(EMA_TEST_TMP_DIR) / "two_set_beam_short";
@@ -136,13 +137,25 @@ TEST(TwoSetBeam, TwinPolesAreDroppedAlsoWhereTheBandsMisfitRejectsEveryRefinemen
   const nlohmann::json two =
       FitToJson(data / "simulate.toml", LightSensorPlan(data, tmp / "short-records.toml", 0.0025, 2048), tmp / "two");
   ASSERT_EQ(two["modes"].size(), 6u) << two["modes"].dump();
-  EXPECT_EQ(two["refinement"]["termination"], "rejected") << two["refinement"].dump();
   EXPECT_GE(DroppedAsSetTwins(two, "every set's refined poles stay in place"), 1) << two["dropped"].dump();
-  // One pole per mode, each near the light sets' mean (0.1–0.9 % apart): within 1 % of the
-  // long-record test's modes.
-  const double expected_hz[] = {46.14, 65.18, 128.57, 262.79, 486.26, 789.01};
-  for (size_t k = 0; k < 6; ++k)
-    EXPECT_NEAR(two["modes"][k]["frequency_hz"].get<double>(), expected_hz[k], 0.01 * expected_hz[k]) << k;
+  const std::string summary = two["refinement"]["message"].get<std::string>();
+  EXPECT_NE(summary.find("each of 2 roving sets fitted with its own poles"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("above the noise: each set keeps the frequencies it saw"), std::string::npos) << summary;
+  // What the same sets give with 2 s records (the fit of OneModeSeenAsTwoClosePolesIsFittedAsOne):
+  // each set's frequency within 0.2 % (the leakage biases the undecayed 46 Hz mode by 0.1 %), and the
+  // gap between the sets — the leakage moves both alike — within 35 % of its own, sign included
+  // (measured 2026-11-30: within 22 %), so sets swapped or merged fail.
+  const double set1_hz[] = {46.063, 64.900, 128.735, 262.923, 485.577, 787.858};
+  const double set2_hz[] = {46.218, 65.465, 128.404, 262.661, 486.945, 790.147};
+  for (size_t k = 0; k < 6; ++k) {
+    const auto& sets = two["modes"][k]["sets"];
+    ASSERT_EQ(sets.size(), 2u) << k;
+    const double f1 = sets[0]["frequency_hz"].get<double>(), f2 = sets[1]["frequency_hz"].get<double>();
+    EXPECT_NEAR(f1, set1_hz[k], 2e-3 * set1_hz[k]) << k;
+    EXPECT_NEAR(f2, set2_hz[k], 2e-3 * set2_hz[k]) << k;
+    const double gap = set2_hz[k] - set1_hz[k];
+    EXPECT_NEAR(f2 - f1, gap, 0.35 * std::abs(gap)) << k;
+  }
 }
 
 }  // namespace
