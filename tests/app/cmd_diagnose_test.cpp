@@ -16,6 +16,19 @@
 namespace ema::app {
 namespace {
 
+namespace fs = std::filesystem;
+
+// Form-rich benchmark case 31's files (tests/diagnose/data/form-rich-31/README.md).
+fs::path FormRich31() { return fs::path(EMA_SOURCE_DIR) / "tests/diagnose/data/form-rich-31"; }
+
+// An empty folder of its own under the test build's tmp.
+fs::path FreshDir(const char* name) {
+  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
 TEST(DiagnoseWords, AModelWrongOutsideTheVocabularySaysSoFirst) {
   // The two-body stack of the diagnosis benchmark with every body 1.2 % heavier than its model
   // and every spring off by 1 % of its own (seed 12): each mode about 0.6 % low, the test's σ
@@ -57,11 +70,8 @@ TEST(DiagnoseWords, AUniformMassTheModelsSharedErrorAlsoExplainsIsNamed) {
   // pattern, so the model as given ranks first — but the all-points mass is inside the
   // vocabulary, and the first screen must name it with what decides, never "outside the
   // vocabulary".
-  namespace fs = std::filesystem;
-  const fs::path data = fs::path(EMA_SOURCE_DIR) / "tests/diagnose/data/form-rich-31";
-  const fs::path dir = fs::path(EMA_TEST_TMP_DIR) / "uniform-mass-lookalike";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path data = FormRich31();
+  const fs::path dir = FreshDir("uniform-mass-lookalike");
   ASSERT_EQ(test::RunEma("diagnose '" + (data / "nominal.toml").string() + "' --test '" + (data / "modes-test.unv").string() +
                              "' --json '" + (dir / "diag.json").string() + "'",
                          dir),
@@ -86,6 +96,28 @@ TEST(DiagnoseWords, AUniformMassTheModelsSharedErrorAlsoExplainsIsNamed) {
   EXPECT_NE(screen.find("shared by all its frequencies"), std::string::npos) << screen;
   EXPECT_NE(screen.find("take that reading"), std::string::npos) << screen;
   EXPECT_EQ(screen.find("outside the vocabulary"), std::string::npos) << screen;
+}
+
+// Two tests of one setup: the diagnosis runs, and says that the model's own error is counted for
+// each (the form family's follow-up tests diagnosed with their first test: 30 → 19 of 46 right).
+TEST(DiagnoseWords, TwoTestsOfOneSetupAreWarnedAbout) {
+  const fs::path data = FormRich31();
+  const fs::path dir = FreshDir("two-tests-one-setup");
+  const fs::path copy = dir / "modes-repeat.unv";
+  fs::copy_file(data / "modes-test.unv", copy);
+  fs::copy_file(data / "modes-test.json", dir / "modes-repeat.json");
+  ASSERT_EQ(test::RunEma("diagnose '" + (data / "nominal.toml").string() + "' --test '" + (data / "modes-test.unv").string() +
+                             "' --test '" + copy.string() + "' --json '" + (dir / "diag.json").string() + "'",
+                         dir),
+            0)
+      << test::Slurp(dir / "stderr.txt");
+  const std::string said = test::Slurp(dir / "stderr.txt");
+  EXPECT_NE(said.find("are tests of one setup (the nominal model): each gets its own model error"), std::string::npos)
+      << said;
+  EXPECT_NE(said.find("modes-repeat.unv"), std::string::npos) << said;
+  // One test alone: no such warning.
+  ASSERT_EQ(test::RunEma("diagnose '" + (data / "nominal.toml").string() + "' --test '" + copy.string() + "'", dir), 0);
+  EXPECT_EQ(test::Slurp(dir / "stderr.txt").find("tests of one setup"), std::string::npos);
 }
 
 }  // namespace
