@@ -257,6 +257,20 @@ void FillModel(const FitData& data, const std::vector<SelectedPole>& selected, c
   model->upper_residual = lsfd.upper_residual;
 }
 
+// The note of a pole dropped as the same mode as `kept`: "same mode as the one at 485.35 Hz" and
+// then `why`. Two decimals, as the note gives the dropped pole's own frequency: "473 Hz" and
+// "1.05e+03 Hz" beside "1059.42 Hz" read as another mode.
+DroppedPole MergedPole(const Pole& dropped, const Pole& kept, const std::string& why) {
+  std::ostringstream reason;
+  reason << std::fixed << std::setprecision(2) << "same mode as the one at " << kept.frequency_hz << " Hz" << why;
+  DroppedPole d;
+  d.frequency_hz = dropped.frequency_hz;
+  d.damping_ratio = dropped.damping_ratio;
+  d.merged_into_hz = kept.frequency_hz;
+  d.reason = reason.str();
+  return d;
+}
+
 // Two poles whose half-power bands overlap, with the same participation vector (the references
 // excite them alike: m >= 2) but living on different outputs (little overlap of |shape|^2) are one
 // mode measured with different frequencies by different roving sets (sensor mass loading) or
@@ -287,18 +301,11 @@ int FindSplitPole(const FitData& data, const std::vector<SelectedPole>& selected
       const int weak = energy_a < energy_b ? a : b, strong = weak == a ? b : a;
       std::ostringstream why;
       why.precision(3);
-      // The kept pole's frequency as the note gives the dropped one's (two decimals): "473 Hz" and
-      // "1.05e+03 Hz" beside "1059.42 Hz" read as another mode.
-      why << std::fixed << std::setprecision(2) << "same mode as the one at " << selected[strong].pole.frequency_hz
-          << std::defaultfloat << std::setprecision(3) << " Hz seen on other outputs ("
-          << (m >= 2 ? "participation MAC " : "") ;
+      why << " seen on other outputs (" << (m >= 2 ? "participation MAC " : "");
       if (m >= 2) why << part_mac << ", ";
       why << "shape overlap " << overlap
           << "): roving sets or records disagree on its frequency; the mode is fitted as one pole";
-      dropped->frequency_hz = selected[weak].pole.frequency_hz;
-      dropped->damping_ratio = selected[weak].pole.damping_ratio;
-      dropped->merged_into_hz = selected[strong].pole.frequency_hz;
-      dropped->reason = why.str();
+      *dropped = MergedPole(selected[weak].pole, selected[strong].pole, why.str());
       return weak;
     }
   return -1;
@@ -376,28 +383,20 @@ std::vector<int> FindSetSplitPoles(const FitData& data, const FitOptions& option
     const PerSetRefinement per = RefinePerSet(data, options, fewer, progress);
     // Usable; or — where a band's misfit rejects every refinement, the one-set test's too (leakage
     // of a long decay) — every set's poles now stay in place where with the twins one was pulled.
-    const bool in_place = !per.ok && per.poles_plausible;
-    if (!per.ok && !in_place) continue;
+    if (!per.ok && !per.poles_plausible) continue;
     double chi2 = 0.0;
     for (const auto& r : per.sets) chi2 = std::max(chi2, r.summary.reduced_chi2);
-    for (size_t k = 0; k < weak.size(); ++k) {
-      std::ostringstream why;
-      why << std::fixed << std::setprecision(2) << "same mode as the one at " << selected[strong[k]].pole.frequency_hz
-          << std::defaultfloat << std::setprecision(3)
-          << " Hz, within two half-power bandwidths of it: the roving sets see it at slightly different frequencies; ";
-      if (per.ok)
-        why << "with one pole for both every set's own refinement fits (largest reduced chi2 " << chi2
-            << "), with two it did not";
-      else
-        why << "with one pole for both every set's refined poles stay in place (largest reduced chi2 " << chi2
-            << ", the band's misfit), with two one was pulled towards its twin";
-      DroppedPole d;
-      d.frequency_hz = selected[weak[k]].pole.frequency_hz;
-      d.damping_ratio = selected[weak[k]].pole.damping_ratio;
-      d.merged_into_hz = selected[strong[k]].pole.frequency_hz;
-      d.reason = why.str();
-      dropped->push_back(std::move(d));
-    }
+    std::ostringstream why;
+    why.precision(3);
+    why << ", within two half-power bandwidths of it: the roving sets see it at slightly different frequencies; ";
+    if (per.ok)
+      why << "with one pole for both every set's own refinement fits (largest reduced chi2 " << chi2
+          << "), with two it did not";
+    else
+      why << "with one pole for both every set's refined poles stay in place (largest reduced chi2 " << chi2
+          << ", the band's misfit), with two one was pulled towards its twin";
+    for (size_t k = 0; k < weak.size(); ++k)
+      dropped->push_back(MergedPole(selected[weak[k]].pole, selected[strong[k]].pole, why.str()));
     std::sort(weak.rbegin(), weak.rend());
     return weak;
   }
@@ -475,15 +474,17 @@ FitResult FitPreparedData(const FitData& data, const FitOptions& options, const 
         PerSetRefinement per = RefinePerSet(data, options, result.selected, modes_progress);
         // Every set's poles stayed in place and only the misfit rejected them (a band whose misfit
         // no modal model removes: leakage of a long decay; the one-set test's refinement is
-        // rejected too): the sets still see each mode at their own frequency, which one pole for
-        // all cannot hold — each set keeps its poles, the misfit said and their σ scaled by it.
-        // Only where one pole could not hold them — the sets see some mode apart by at least a tenth of
-        // its half-power bandwidth, which one pole at their mean misfits near resonance by ~20 % — and
-        // only for the automatic selection (poles picked by hand keep what was picked).
+        // rejected too). Where the sets see some mode apart by at least a tenth of its half-power
+        // bandwidth — which one pole at their mean misfits near resonance by ~20 % — one pole for
+        // all cannot hold what they saw: each set keeps its poles, the misfit said and their σ
+        // scaled by it. Automatic selection only: poles picked by hand keep what was picked.
         std::string misfit_why;
         if (!per.ok && per.poles_plausible && !per.why.empty() && options.select_frequencies_hz.empty()) {
           PerSetRefinement lenient = RefinePerSet(data, options, result.selected, modes_progress, true);
-          if (lenient.ok && SetsSeeModesApart(lenient, kSetsApartBandwidths)) misfit_why = per.why, per = std::move(lenient);
+          if (lenient.ok && SetsSeeModesApart(lenient, kSetsApartBandwidths)) {
+            misfit_why = per.why;
+            per = std::move(lenient);
+          }
         }
         bool have_ml = false;
         if (per.ok) {

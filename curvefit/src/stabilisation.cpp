@@ -43,16 +43,22 @@ double StdDev(const std::vector<double>& v) {
   return std::sqrt(ss / (v.size() - 1));
 }
 
+/// Disjoint sets of 0..n−1 (union-find with path halving): the clusters the average linkage and
+/// the fragment join build.
+struct DisjointSets {
+  explicit DisjointSets(int n) : parent(static_cast<size_t>(n)) { std::iota(parent.begin(), parent.end(), 0); }
+  int Find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  std::vector<int> parent;
+};
+
 /// Average-linkage agglomerative clustering by the nearest-neighbour chain (O(k^2)); returns a
 /// cluster id per item for the dendrogram cut at `cutoff`.
 std::vector<int> AverageLinkage(const std::vector<const Pole*>& items, double cutoff) {
   const int k = static_cast<int>(items.size());
-  std::vector<int> parent(k);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets sets(k);
   if (k > 1) {
     Eigen::MatrixXd d(k, k);
     for (int i = 0; i < k; ++i) {
@@ -86,7 +92,7 @@ std::vector<int> AverageLinkage(const std::vector<const Pole*>& items, double cu
       chain.pop_back();
       chain.pop_back();
       // Merge prev into a (Lance-Williams update for average linkage).
-      if (best_d <= cutoff) parent[find(prev)] = find(a);
+      if (best_d <= cutoff) sets.parent[sets.Find(prev)] = sets.Find(a);
       for (int c = 0; c < k; ++c)
         if (active[c] && c != a && c != prev)
           d(a, c) = d(c, a) = (size[a] * d(a, c) + size[prev] * d(prev, c)) / (size[a] + size[prev]);
@@ -96,7 +102,7 @@ std::vector<int> AverageLinkage(const std::vector<const Pole*>& items, double cu
     }
   }
   std::vector<int> id(k);
-  for (int i = 0; i < k; ++i) id[i] = find(i);
+  for (int i = 0; i < k; ++i) id[i] = sets.Find(i);
   return id;
 }
 
@@ -137,25 +143,20 @@ void JoinColumnFragments(std::vector<std::vector<const Pole*>>* clusters, double
       pairs.push_back({d, i, j});
     }
   std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.d < y.d; });
-  std::vector<int> root(c);
-  std::iota(root.begin(), root.end(), 0);
-  auto find = [&](int x) {
-    while (root[x] != x) x = root[x] = root[root[x]];
-    return x;
-  };
+  DisjointSets columns(c);
   for (const Pair& pr : pairs) {
-    const int a = find(pr.i), b = find(pr.j);
+    const int a = columns.Find(pr.i), b = columns.Find(pr.j);
     if (a == b) continue;
     bool shared = false;
     for (size_t o = 0; o < orders[a].size() && !shared; ++o) shared = orders[a][o] && orders[b][o];
     if (shared) continue;
     for (size_t o = 0; o < orders[a].size(); ++o) orders[a][o] |= orders[b][o];
-    root[b] = a;
+    columns.parent[b] = a;
   }
   std::vector<std::vector<const Pole*>> joined;
   std::vector<int> slot(c, -1);
   for (int i = 0; i < c; ++i) {
-    const int r = find(i);
+    const int r = columns.Find(i);
     if (slot[r] < 0) slot[r] = static_cast<int>(joined.size()), joined.emplace_back();
     auto& to = joined[static_cast<size_t>(slot[r])];
     to.insert(to.end(), (*clusters)[i].begin(), (*clusters)[i].end());

@@ -17,12 +17,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
-nlohmann::json FitToJson(const fs::path& simulate, const fs::path& plan, const fs::path& dir) {
+// The truth and the plan of the two-set test (README.md beside them).
+fs::path Data() { return fs::path(EMA_SOURCE_DIR) / "tests/curvefit/data/two-set-beam"; }
+
+// The truth tested with `plan` (ema simulate, frf, fit over the first test's band) in `dir`: MODES.json.
+nlohmann::json FitToJson(const fs::path& plan, const fs::path& dir) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const auto in = [&](const char* name) { return "'" + (dir / name).string() + "'"; };
-  EXPECT_EQ(ema::test::RunEma("simulate '" + simulate.string() + "' --plan '" + plan.string() + "' -o " +
-                                  in("time.unv") + " --binary",
+  EXPECT_EQ(ema::test::RunEma("simulate '" + (Data() / "simulate.toml").string() + "' --plan '" + plan.string() +
+                                  "' -o " + in("time.unv") + " --binary",
                               dir),
             0)
       << ema::test::Slurp(dir / "stderr.txt");
@@ -38,7 +42,7 @@ nlohmann::json FitToJson(const fs::path& simulate, const fs::path& plan, const f
 }
 
 TEST(TwoSetBeam, EveryModeIsFoundAndEachSetGetsItsOwnPoles) {
-  const fs::path data = fs::path(EMA_SOURCE_DIR) / "tests/curvefit/data/two-set-beam";
+  const fs::path data = Data();
   const fs::path tmp = fs::path(EMA_TEST_TMP_DIR) / "two_set_beam";
   // The first test: set 1 of the plan alone (replan.toml without its added set 2).
   fs::create_directories(tmp);
@@ -53,8 +57,8 @@ TEST(TwoSetBeam, EveryModeIsFoundAndEachSetGetsItsOwnPoles) {
     std::getline(full, line);
     first << line << '\n';
   }
-  const nlohmann::json one = FitToJson(data / "simulate.toml", tmp / "first-set.toml", tmp / "one");
-  const nlohmann::json two = FitToJson(data / "simulate.toml", data / "replan.toml", tmp / "two");
+  const nlohmann::json one = FitToJson(tmp / "first-set.toml", tmp / "one");
+  const nlohmann::json two = FitToJson(data / "replan.toml", tmp / "two");
   ASSERT_EQ(one["modes"].size(), 6u) << one["modes"].dump();
   // Before the fragments of a drifting column were joined, the automatic selection kept 3 of the 6
   // (63, 127 and 257 Hz were cut into pieces each shorter than the span test) and every refinement
@@ -74,23 +78,22 @@ TEST(TwoSetBeam, EveryModeIsFoundAndEachSetGetsItsOwnPoles) {
   }
 }
 
-// The same test with 2.5 g sensors: each mode sits only 0.1–0.9 % apart in the two sets, so close
-// that one mode's two columns in the stabilisation diagram both last and their shapes blend over
-// both sets' outputs (the split-pole rule, which looks for shapes on different outputs, keeps
-// both). Two poles for one mode leave each set's refinement pressed against a neighbour; with the
-// weaker dropped, every set fits with its own poles. Before: 7 modes, the refinement rejected.
-// The plan of the two-set test with its sensors at `sensor_mass` kg and, when `samples` > 0, that
-// many samples per record.
-fs::path LightSensorPlan(const fs::path& data, const fs::path& to, double sensor_mass, int samples) {
-  std::ifstream full(data / "replan.toml");
-  std::ofstream light(to);
-  std::string line;
-  while (std::getline(full, line))
-    light << (line.rfind("sensor_mass", 0) == 0 ? "sensor_mass = " + std::to_string(sensor_mass)
-              : samples > 0 && line.rfind("samples", 0) == 0 ? "samples = " + std::to_string(samples)
-                                                              : line)
-          << '\n';
-  return to;
+// The two-set test with 2.5 g sensors and, when `samples` > 0, that many samples per record, fitted
+// in its own folder `name` under the test build's tmp: MODES.json.
+nlohmann::json FitLightSensorTest(const char* name, int samples) {
+  const fs::path tmp = fs::path(EMA_TEST_TMP_DIR) / name;
+  fs::create_directories(tmp);
+  {
+    std::ifstream full(Data() / "replan.toml");
+    std::ofstream light(tmp / "plan.toml");
+    std::string line;
+    while (std::getline(full, line))
+      light << (line.rfind("sensor_mass", 0) == 0                     ? "sensor_mass = 0.0025"
+                : samples > 0 && line.rfind("samples", 0) == 0 ? "samples = " + std::to_string(samples)
+                                                                : line)
+            << '\n';
+  }
+  return FitToJson(tmp / "plan.toml", tmp / "two");
 }
 
 int DroppedAsSetTwins(const nlohmann::json& fit, const std::string& how) {
@@ -103,12 +106,13 @@ int DroppedAsSetTwins(const nlohmann::json& fit, const std::string& how) {
   return n;
 }
 
+// The same test with 2.5 g sensors: each mode sits only 0.1–0.9 % apart in the two sets, so close
+// that one mode's two columns in the stabilisation diagram both last and their shapes blend over
+// both sets' outputs (the split-pole rule, which looks for shapes on different outputs, keeps
+// both). Two poles for one mode leave each set's refinement pressed against a neighbour; with the
+// weaker dropped, every set fits with its own poles. Before: 7 modes, the refinement rejected.
 TEST(TwoSetBeam, OneModeSeenAsTwoClosePolesIsFittedAsOne) {
-  const fs::path data = fs::path(EMA_SOURCE_DIR) / "tests/curvefit/data/two-set-beam";
-  const fs::path tmp = fs::path(EMA_TEST_TMP_DIR) / "two_set_beam_light";
-  fs::create_directories(tmp);
-  const nlohmann::json two =
-      FitToJson(data / "simulate.toml", LightSensorPlan(data, tmp / "light-sensors.toml", 0.0025, 0), tmp / "two");
+  const nlohmann::json two = FitLightSensorTest("two_set_beam_light", 0);
   ASSERT_EQ(two["modes"].size(), 6u) << two["modes"].dump();
   EXPECT_NE(two["refinement"]["message"].get<std::string>().find("each of 2 roving sets fitted with its own poles"),
             std::string::npos)
@@ -131,11 +135,7 @@ TEST(TwoSetBeam, OneModeSeenAsTwoClosePolesIsFittedAsOne) {
 // modes, 788 Hz twice). Then each set keeps the poles it saw, the misfit said (before: one pole per
 // mode, the PolyMAX pole of one set, while the sets see the modes 0.1–0.9 % apart).
 TEST(TwoSetBeam, TwinPolesAreDroppedAlsoWhereTheBandsMisfitRejectsEveryRefinement) {
-  const fs::path data = fs::path(EMA_SOURCE_DIR) / "tests/curvefit/data/two-set-beam";
-  const fs::path tmp = fs::path(EMA_TEST_TMP_DIR) / "two_set_beam_short";
-  fs::create_directories(tmp);
-  const nlohmann::json two =
-      FitToJson(data / "simulate.toml", LightSensorPlan(data, tmp / "short-records.toml", 0.0025, 2048), tmp / "two");
+  const nlohmann::json two = FitLightSensorTest("two_set_beam_short", 2048);
   ASSERT_EQ(two["modes"].size(), 6u) << two["modes"].dump();
   EXPECT_GE(DroppedAsSetTwins(two, "every set's refined poles stay in place"), 1) << two["dropped"].dump();
   const std::string summary = two["refinement"]["message"].get<std::string>();
