@@ -115,7 +115,8 @@ TEST(PartsDiagnosis, SetsFarBehindSkipTheFullSolvesAndLeaveTheLeadersAlone) {
   DiagnoseOptions every;
   every.exact_margin = std::numeric_limits<double>::infinity();
   const Diagnosis all_checked = Diagnose(nominal, {{"", test}}, every);
-  const Diagnosis margin = Diagnose(nominal, {{"", test}});
+  const DiagnoseOptions margin_options;
+  const Diagnosis margin = Diagnose(nominal, {{"", test}}, margin_options);
   EXPECT_LT(margin.model_solves, all_checked.model_solves);
   ASSERT_GE(margin.candidates.size(), 3u);
   ASSERT_GE(all_checked.candidates.size(), 3u);
@@ -133,7 +134,9 @@ TEST(PartsDiagnosis, SetsFarBehindSkipTheFullSolvesAndLeaveTheLeadersAlone) {
   for (const Candidate& c : margin.candidates)
     if (c.reduced_model) {
       ++unchecked;
-      EXPECT_LT(c.probability, 1e-4) << c.kind << " " << c.target;
+      // What the margin promises: more than exact_margin nats behind rank 1 (measured 4e-4 of a
+      // probability with OpenBLAS's AVX-512 kernels, below 1e-4 with its Haswell ones).
+      EXPECT_LT(c.probability, std::exp(-margin_options.exact_margin) * b.probability) << c.kind << " " << c.target;
     }
   EXPECT_GT(unchecked, 0);
 }
