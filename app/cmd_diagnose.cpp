@@ -49,10 +49,11 @@ std::string ModeTable(const diagnose::Candidate& before, const diagnose::Candida
   std::ostringstream out;
   out << "| setup | test mode | test f [Hz] | model f before [Hz] | agreement before [%] | MAC before | "
          "model f after [Hz] | agreement after [%] | MAC after |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  const bool several = report::SeveralTestsOfOneSetup(before.modes);
   for (size_t i = 0; i < before.modes.size() && i < after.modes.size(); ++i) {
     const auto& b = before.modes[i];
     const auto& a = after.modes[i];
-    out << "| " << (b.setup.empty() ? "nominal" : b.setup) << " | " << b.test_mode + 1 << " | "
+    out << "| " << (b.setup.empty() ? "nominal" : b.setup) << (several ? ", test " + std::to_string(b.test + 1) : "") << " | " << b.test_mode + 1 << " | "
         << Fixed(b.test_frequency_hz, 1) << " | " << Fixed(b.model_frequency_hz, 1) << " | "
         << Fixed(b.agreement_pct, 1) << " | " << Fixed(b.mac, 3) << " | " << Fixed(a.model_frequency_hz, 1) << " | "
         << Fixed(a.agreement_pct, 1) << " | " << Fixed(a.mac, 3) << " |\n";
@@ -82,10 +83,10 @@ void InadequateModelWords(const diagnose::Diagnosis& d, const pipeline::Findings
        << ") is larger than the test's σ. The readings below are the vocabulary's best; their probabilities are "
           "computed with that error and compare them with each other only.\n";
   std::string where;
+  const bool several = report::SeveralTestsOfOneSetup(d.candidates.front().modes);
   for (std::size_t i = 0; i < f.worst_modes.size(); ++i) {
     const diagnose::ModeComparison& m = d.candidates.front().modes[static_cast<std::size_t>(f.worst_modes[i])];
-    where += (i ? "; " : "") + std::string("mode ") + std::to_string(m.test_mode + 1) + (m.setup.empty() ? "" : " of " + m.setup) +
-             " (" + Number(m.test_frequency_hz, 4) + " Hz): frequency " + (m.frequency_misfit_sigma >= 0 ? "+" : "") +
+    where += (i ? "; " : "") + report::TestModeWords(m, several) + " (" + Number(m.test_frequency_hz, 4) + " Hz): frequency " + (m.frequency_misfit_sigma >= 0 ? "+" : "") +
              Number(m.frequency_misfit_sigma, 2) + "σ, shape " + Number(m.shape_misfit_sigma, 2) + "σ";
   }
   if (!where.empty()) *out << "  Where the misfit sits (rank 1, in the test's σ): " << where << ".\n";
@@ -321,18 +322,6 @@ int RunDiagnose(const std::vector<std::string>& args) {
   const std::optional<app::DiagnoseConfig> config = app::ParseDiagnoseArgs(args);
   if (!config) return 0;
   const model::Model model = formats::ReadModelFile(config->model_path);
-  // Two tests of one setup each get their own model error, though the model's error is the same
-  // in both: counted twice, it lets readings that absorb it gain (docs/diagnose.md, measured on
-  // the form family's follow-up tests). Said, not refused: a repeat test is a user's right.
-  std::map<std::string, std::string> first_of_setup;
-  for (const auto& [setup, path] : config->tests) {
-    const auto [it, first] = first_of_setup.emplace(setup, path);
-    if (!first)
-      std::cerr << "ema diagnose: warning: " << it->second << " and " << path << " are tests of one setup ("
-                << (setup.empty() ? std::string("the nominal model") : "'" + setup + "'")
-                << "): each gets its own model error although the model's error is the same in both, so it is "
-                   "counted twice and readings that absorb it gain; diagnose them apart (docs/diagnose.md)\n";
-  }
   std::vector<diagnose::SetupModes> sets;
   for (const auto& [setup, path] : config->tests) {
     ModeSet modes = formats::ReadModeSet(path);

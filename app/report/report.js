@@ -223,6 +223,10 @@
         'MAC', 'shape misfit (σ)', 'share of the fall', 'with rank 1'], [], 'evidence');
       ev.id = 'evidence';
       var tb = ev.querySelector('tbody');
+      // Two tests of one setup (a repeat, a follow-up test): their modes told apart by the test.
+      var severalTests = modes.some(function (a) {
+        return modes.some(function (b) { return a.setup === b.setup && a.test !== undefined && a.test !== b.test; });
+      });
       modes.forEach(function (m) {
         var tr = el('tr', { 'class': 'v-' + m.verdict.replace(/ /g, '-') });
         var cell = function (text, cls) { var td = el('td', { text: text }); if (cls) td.className = cls; tr.appendChild(td); return td; };
@@ -230,7 +234,7 @@
         var arrow = function (b, a, f, pb, pa) {
           return !pb && !pa ? 'unpaired' : (pb ? f(b) : 'unpaired') + '\u00a0→ ' + (pa ? f(a) : 'unpaired');
         };
-        cell(m.setup || '');
+        cell((m.setup || '') + (severalTests ? (m.setup ? ', ' : '') + 'test ' + m.test : ''));
         cell(String(m.test_mode));
         cell(fmt(m.test_frequency_hz, 2) + '\u00a0± ' + (m.sigma_hz === null ? '–' : Number(m.sigma_hz).toPrecision(2)));
         cell(arrow(m.model_frequency_hz_before, m.model_frequency_hz_after, function (v) { return fmt(v, 1); },

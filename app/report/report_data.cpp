@@ -246,9 +246,13 @@ json DiagnosisView(const pipeline::DiagnoseStage& stage) {
   // ---- evidence per test mode: as given (before) and with rank 1 (after), in σ of the test ----
   json modes = json::array();
   json failing = json::array();
+  std::vector<diagnose::ModeComparison> as_given;
+  for (const pipeline::ModeEvidence& m : f.modes) as_given.push_back(m.before);
+  const bool several = SeveralTestsOfOneSetup(as_given);
   for (const pipeline::ModeEvidence& m : f.modes) {
     const diagnose::ModeComparison &b = m.before, &a = m.after;
     json row = {{"setup", b.setup},
+                {"test", b.test + 1},
                 {"test_mode", b.test_mode + 1},
                 {"test_frequency_hz", NumberOrNull(b.test_frequency_hz)},
                 {"sigma_hz", NumberOrNull(b.sigma_hz)},
@@ -265,8 +269,7 @@ json DiagnosisView(const pipeline::DiagnoseStage& stage) {
                 {"share_pct", NumberOrNull(m.share_pct)},
                 {"verdict", VerdictName(m.verdict)}};
     if (m.verdict == pipeline::ModeVerdict::kUnpaired || m.verdict == pipeline::ModeVerdict::kMisfit) {
-      const std::string where = b.setup + (b.setup.empty() ? "" : " ") + "mode " + std::to_string(b.test_mode + 1) + " (" +
-                                Significant(b.test_frequency_hz, 4) + " Hz)";
+      const std::string where = TestModeWords(b, several) + " (" + Significant(b.test_frequency_hz, 4) + " Hz)";
       failing.push_back(where + (m.verdict == pipeline::ModeVerdict::kUnpaired
                                      ? ": no model mode pairs with it"
                                      : ": " + Significant(a.frequency_misfit_sigma, 2) + " σ in frequency, " +

@@ -32,6 +32,19 @@ std::string SelectText(const std::vector<double>& frequencies_hz) {
   return list;
 }
 
+bool SeveralTestsOfOneSetup(const std::vector<diagnose::ModeComparison>& modes) {
+  for (const diagnose::ModeComparison& a : modes)
+    for (const diagnose::ModeComparison& b : modes)
+      if (a.setup == b.setup && a.test != b.test) return true;
+  return false;
+}
+
+std::string TestModeWords(const diagnose::ModeComparison& mode, bool name_test) {
+  const std::string number = "mode " + std::to_string(mode.test_mode + 1);
+  if (!name_test) return number + (mode.setup.empty() ? "" : " of " + mode.setup);
+  return number + " of test " + std::to_string(mode.test + 1) + (mode.setup.empty() ? "" : " (" + mode.setup + ")");
+}
+
 std::string Percent(double probability) {
   char text[32];
   std::snprintf(text, sizeof text, "%.1f %%", 100.0 * probability);

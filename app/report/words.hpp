@@ -29,6 +29,14 @@ std::string RehearsalWords(const formats::ProjectTest& test);
 /// sentence, "Agreement / MAC: …"; "" for 0.
 std::string AgreementBasisWords(double sensor_mass_kg);
 
+/// Whether `modes` (a candidate's, one per test mode) hold two tests of one setup, whose modes
+/// must then be told apart by their test.
+bool SeveralTestsOfOneSetup(const std::vector<diagnose::ModeComparison>& modes);
+
+/// "mode 3", "mode 3 of stud-5um", with `name_test` "mode 3 of test 2" / "mode 3 of test 2
+/// (stud-5um)".
+std::string TestModeWords(const diagnose::ModeComparison& mode, bool name_test);
+
 /// "12.3 %" of a probability in [0, 1].
 std::string Percent(double probability);
 

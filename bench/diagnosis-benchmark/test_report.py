@@ -88,5 +88,22 @@ class FormReport(unittest.TestCase):
         self.assertNotIn("| 5 | 0.5 % |", text)   # the named spread is not
 
 
+    def test_closed_loop(self):
+        # Rows 0-2 at 0.5–2 %: row 0 not replanned (right at 0.9); row 1 replanned and right after
+        # (its mass found, p 0.95); row 2 replanned, "none" after at 0.7 (right: nothing hidden).
+        rows = [dict(r) for r in ROWS]
+        rows[1]["replan"] = {"right_after": True, "p_rank1_after": 0.95,
+                             "rank1_after": {"kind": "series_compliance+added_mass", "target": "supports+points:102"}}
+        rows[2]["replan"] = {"right_after": True, "p_rank1_after": 0.7, "rank1_after": {"kind": "none", "target": ""}}
+        lines = table_rows(report.closed_loop_table(rows))
+        self.assertIn("| 0/2 = 0.0 % | 2/2 = 100.0 % |", lines["replanned cases right"])
+        self.assertIn("| 1/3 = 33.3 % | 3/3 = 100.0 % |", lines["every case right"])
+        self.assertIn("| 1/1 = 100.0 % | 1/1 = 100.0 % |", lines["clearly visible hidden effects right"])
+        self.assertIn("| 1/1 = 100.0 % | 0/1 = 0.0 % |", lines['nothing hidden, rank 1 not "none"'])
+        # Brier first (0.01 + 0.64 + 0.36)/3 = 0.337; after (0.01 + 0.0025 + 0.09)/3 = 0.034
+        self.assertIn("| 0.337 | 0.034 |", lines["Brier score of rank 1's probability"])
+        self.assertEqual(report.closed_loop_table(ROWS), "")  # no --replan: no table
+
+
 if __name__ == "__main__":
     unittest.main()

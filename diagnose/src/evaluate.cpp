@@ -218,6 +218,7 @@ Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, co
       block_start_.push_back(block_start_.back() + 1 + (per_dof ? static_cast<int>(s.real_shapes.rows()) : 1));
   residual_count_ = block_start_.back();
   model_error_gain_.resize(residual_count_);
+  row_dof_.assign(static_cast<size_t>(residual_count_), -1);
   Eigen::VectorXd log_hz(TestModeCount());
   int mode = 0;
   for (const auto& s : setups_)
@@ -227,8 +228,11 @@ Evaluator::Evaluator(const model::Model& base, std::vector<SetupData> setups, co
       if (per_dof) {
         // ε_s is the rms error of a unit-norm shape, spread over its d DOFs: ε_s / √d at each.
         const double per_row = 1.0 / std::sqrt(static_cast<double>(std::max<Eigen::Index>(1, s.real_shapes.rows())));
-        for (Eigen::Index d = 0; d < s.real_shapes.rows(); ++d)
+        for (Eigen::Index d = 0; d < s.real_shapes.rows(); ++d) {
           model_error_gain_(row + 1 + d) = per_row / s.sigma_dof(d, i);
+          const Dof& dof = s.match.shared[static_cast<size_t>(d)].test_dof;
+          row_dof_[static_cast<size_t>(row + 1 + d)] = static_cast<long long>(dof.node) * 16 + dof.direction + 8;
+        }
       } else {
         model_error_gain_(row + 1) = 1.0 / s.sigma_shape(i);
       }
@@ -439,6 +443,7 @@ Evaluation Evaluator::Compare(
         const int shape_rows = block_start_[static_cast<size_t>(mode) + 1] - row - 1;
         ModeComparison c;
         c.setup = s.name;
+        c.test = static_cast<int>(index);
         c.test_mode = static_cast<int>(i);
         c.test_frequency_hz = s.test_hz(i);
         c.sigma_hz = s.sigma_hz(i);

@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <functional>
+#include <map>
 
 #include "internal.hpp"
 
@@ -46,7 +47,9 @@ struct ModeBlock {
 // Per residual, the factor that turns a residual in measurement σ into one in measurement σ and
 // model error combined: σ_total² = σ² (1 + (ε·gain)²), ε the frequency scale on frequency rows
 // and the shape scale on shape rows.
-// `shape_per_mode`: each test mode's own shape scale (empty: 0 for every mode).
+// `shape_per_mode`: each test mode's own shape scale (empty: 0 for every mode). The refit it
+// serves takes each row alone even where tests of one setup share a mode's error (the evidence
+// does not: SharedErrorGroups) — it only needs the rows' relative weights.
 Eigen::VectorXd ModelErrorScale(const Evaluator& evaluator, double frequency_rel, const Eigen::VectorXd& shape_per_mode) {
   const Eigen::VectorXd& gain = evaluator.ModelErrorGain();
   const std::vector<int>& blocks = evaluator.BlockStart();
@@ -58,6 +61,41 @@ Eigen::VectorXd ModelErrorScale(const Evaluator& evaluator, double frequency_rel
       scale(i) = 1.0 / std::sqrt(1.0 + g * g);
     }
   return scale;
+}
+
+// The test modes whose model error is one draw: those of tests of one setup paired with one model
+// mode. The structure and its model are the same in each such test, only the noise differs, so
+// the model's error of that mode is the same in all of them; counted once per test it would be
+// counted as evidence once per test (a follow-up test diagnosed with the first: docs/diagnose.md
+// "Model error"). A mode of a lone test, or an unpaired one, is a group of its own.
+std::vector<std::vector<int>> SharedErrorGroups(const std::vector<ModeComparison>& modes) {
+  std::vector<std::vector<int>> groups;
+  std::map<std::pair<std::string, int>, size_t> group_of;
+  for (int m = 0; m < static_cast<int>(modes.size()); ++m) {
+    const ModeComparison& c = modes[static_cast<size_t>(m)];
+    if (c.model_mode < 0) {
+      groups.push_back({m});
+      continue;
+    }
+    const auto [at, added] = group_of.try_emplace({c.setup, c.model_mode}, groups.size());
+    if (added) groups.emplace_back();
+    groups[at->second].push_back(m);
+  }
+  return groups;
+}
+
+// Rows that share one model error of pattern v (in σ; v_i = ε·gain_i): their covariance is
+// I + v vᵀ. Whitens the rows of `x` in place — (I + v vᵀ)^(−½) x = x + ((1 + |v|²)^(−½) − 1) v̂ v̂ᵀ x,
+// for one row x / √(1 + v²) — and returns the Gaussian's normalisation −½ ln(1 + |v|²).
+double WhitenShared(const Eigen::VectorXd& v, Eigen::MatrixXd* x) {
+  const double c = v.squaredNorm(), scale = 1.0 / std::sqrt(1.0 + c);
+  if (v.size() == 1) *x *= scale;
+  else if (c > 0.0) {
+    const Eigen::VectorXd unit = v / std::sqrt(c);
+    const Eigen::RowVectorXd along = unit.transpose() * *x;
+    *x += (scale - 1.0) * unit * along;
+  }
+  return std::log(scale);
 }
 
 // Grid points of a log-uniform prior over [lo, hi]: their centres in ln ε, equal weights.
@@ -271,24 +309,39 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
     Eigen::MatrixXd jwj;         // Σ w J̃ᵀJ̃ of the frequency rows + prior curvature
     Eigen::MatrixXd jwu;         // J̃ᵀ W U (k × 2)
   };
+  // Test modes of several tests of one setup paired with one model mode share its model error
+  // (SharedErrorGroups): their frequency rows are whitened together; a lone test's are each alone.
+  const std::vector<std::vector<int>> groups = SharedErrorGroups(f.eval->modes);
   auto scaled_at = [&](double frequency_rel) {
     Scaled out;
     out.jwj = prior_curvature.asDiagonal();
     out.jwu = Eigen::MatrixXd::Zero(k, 2);
-    for (int m = 0; m < modes; ++m) {
-      const int b = blocks[m];  // the mode's frequency row
-      const double g = gain(b) * frequency_rel, scale = 1.0 / std::sqrt(1.0 + g * g);
-      const double r = f.eval->r(b) * scale;
-      out.log_norm += std::log(scale);
-      out.cost_w += Huber(r * r, a);
-      const double w = r * r <= a * a ? 1.0 : a / std::abs(r);
-      const Eigen::Vector2d u = gain(b) * scale * Eigen::Vector2d(1.0, trend(b));
-      out.ur += w * r * u;
-      out.uu += w * u * u.transpose();
-      if (k > 0 && ok) {
-        const Eigen::RowVectorXd jb = scale * jac.row(b);
-        out.jwj += w * jb.transpose() * jb;
-        out.jwu += w * jb.transpose() * u.transpose();
+    for (const std::vector<int>& group : groups) {
+      // Per member its frequency row: the residual, the two shared patterns and the Jacobian row.
+      const int n_rows = static_cast<int>(group.size());
+      Eigen::VectorXd v(n_rows);
+      Eigen::MatrixXd x(n_rows, 3 + k);
+      for (int i = 0; i < n_rows; ++i) {
+        const int b = blocks[group[i]];
+        v(i) = gain(b) * frequency_rel;
+        x(i, 0) = f.eval->r(b);
+        x(i, 1) = gain(b);
+        x(i, 2) = gain(b) * trend(b);
+        x.row(i).tail(k) = jac.row(b);
+      }
+      out.log_norm += WhitenShared(v, &x);
+      for (int i = 0; i < n_rows; ++i) {
+        const double r = x(i, 0);
+        out.cost_w += Huber(r * r, a);
+        const double w = r * r <= a * a ? 1.0 : a / std::abs(r);
+        const Eigen::Vector2d u(x(i, 1), x(i, 2));
+        out.ur += w * r * u;
+        out.uu += w * u * u.transpose();
+        if (k > 0 && ok) {
+          const Eigen::RowVectorXd jb = x.row(i).tail(k);
+          out.jwj += w * jb.transpose() * jb;
+          out.jwu += w * jb.transpose() * u.transpose();
+        }
       }
     }
     return out;
@@ -302,33 +355,60 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
     Eigen::MatrixXd jwj;               // Σ J̃ᵀJ̃ of the shape rows, each mode at its most probable ε_s,m
     Eigen::VectorXd most_probable;     // per mode
   };
+  // A group of test modes (one model mode seen by several tests of one setup) has one shape
+  // error: one ε_s marginalised for the group, and its rows at one test DOF whitened together.
+  const std::vector<long long>& row_dof = problem->Eval().RowDof();
   auto shapes_at = [&](const std::vector<double>& grid) {
     Shapes out;
     out.jwj = Eigen::MatrixXd::Zero(k, k);
     out.most_probable = Eigen::VectorXd::Zero(modes);
-    for (int m = 0; m < modes; ++m) {
-      const int first = blocks[m] + 1, rows = blocks[m + 1] - first;
-      double best = -kInf, sum = 0.0;
+    for (const std::vector<int>& group : groups) {
+      // The group's shape rows by test DOF (a row without one — (1 − MAC) — alone).
+      std::vector<std::vector<int>> by_dof;
+      std::map<long long, size_t> at_dof;
+      for (int m : group)
+        for (int row = blocks[m] + 1; row < blocks[m + 1]; ++row) {
+          const long long dof = row_dof[static_cast<size_t>(row)];
+          if (dof < 0 || group.size() == 1) {
+            by_dof.push_back({row});
+            continue;
+          }
+          const auto [it, added] = at_dof.try_emplace(dof, by_dof.size());
+          if (added) by_dof.emplace_back();
+          by_dof[it->second].push_back(row);
+        }
+      double best = -kInf, sum = 0.0, best_e = 0.0;
       std::vector<double> values;
-      Eigen::VectorXd best_scale = Eigen::VectorXd::Ones(rows);
+      Eigen::MatrixXd best_jac;
       for (double e : grid.empty() ? std::vector<double>{0.0} : grid) {
         double value = 0.0;
-        Eigen::VectorXd scale(rows);
-        for (int d = 0; d < rows; ++d) {
-          const double g = gain(first + d) * e;
-          scale(d) = 1.0 / std::sqrt(1.0 + g * g);
-          const double r = f.eval->r(first + d) * scale(d);
-          value += -0.5 * r * r + std::log(scale(d));
+        std::vector<Eigen::MatrixXd> jac_rows;
+        for (const std::vector<int>& rows : by_dof) {
+          const int n_rows = static_cast<int>(rows.size());
+          Eigen::VectorXd v(n_rows);
+          Eigen::MatrixXd x(n_rows, 1 + k);
+          for (int i = 0; i < n_rows; ++i) {
+            v(i) = gain(rows[i]) * e;
+            x(i, 0) = f.eval->r(rows[i]);
+            x.row(i).tail(k) = jac.row(rows[i]);
+          }
+          value += WhitenShared(v, &x) - 0.5 * x.col(0).squaredNorm();
+          jac_rows.push_back(x.rightCols(k));
         }
         values.push_back(value);
-        if (value > best) best = value, best_scale = scale, out.most_probable(m) = e;
+        if (value > best) {
+          best = value, best_e = e;
+          best_jac.resize(0, k);
+          for (const Eigen::MatrixXd& j : jac_rows) {
+            best_jac.conservativeResize(best_jac.rows() + j.rows(), k);
+            best_jac.bottomRows(j.rows()) = j;
+          }
+        }
       }
       for (double v : values) sum += std::exp(v - best);
       out.log_likelihood += best + std::log(sum / static_cast<double>(values.size()));
-      if (k > 0 && ok && rows > 0) {
-        const Eigen::MatrixXd jb = best_scale.asDiagonal() * jac.middleRows(first, rows);
-        out.jwj += jb.transpose() * jb;
-      }
+      for (int m : group) out.most_probable(m) = best_e;
+      if (k > 0 && ok && best_jac.rows() > 0) out.jwj += best_jac.transpose() * best_jac;
     }
     return out;
   };

@@ -165,6 +165,9 @@ class Evaluator {
   /// and when all modes share one frequency) — the pattern of a model error that grows or shrinks
   /// with frequency (shear and rotary inertia a beam model lacks, a mesh too coarse).
   const Eigen::VectorXd& ModelErrorTrend() const { return model_error_trend_; }
+  /// Per residual row: the test DOF a per-DOF shape row measures (node · 16 + direction + 8), −1 on
+  /// frequency and (1 − MAC) rows — which rows of two tests of one setup see the same point.
+  const std::vector<long long>& RowDof() const { return row_dof_; }
   int Solves() const { return solves_; }
   int ReducedSolves() const { return reduced_solves_; }
   /// Exact: the model with `effects` solved in full for every setup.
@@ -193,6 +196,7 @@ class Evaluator {
   std::vector<int> block_start_;
   Eigen::VectorXd model_error_gain_;
   Eigen::VectorXd model_error_trend_;
+  std::vector<long long> row_dof_;
   int solves_ = 0;
   int reduced_solves_ = 0;
   bool reduced_ = false;

@@ -421,6 +421,7 @@ json CandidateJson(const diagnose::Candidate& c) {
   out["modes"] = json::array();
   for (const auto& m : c.modes)
     out["modes"].push_back({{"setup", m.setup},
+                            {"test", m.test + 1},
                             {"test_mode", m.test_mode + 1},
                             {"test_frequency_hz", m.test_frequency_hz},
                             {"sigma_hz", NumberOrNull(m.sigma_hz)},
@@ -488,6 +489,7 @@ json DiagnosisModeRows(const diagnose::Candidate& before, const diagnose::Candid
     const auto& b = before.modes[i];
     const auto& a = after.modes[i];
     rows.push_back({{"setup", b.setup},
+                    {"test", b.test + 1},
                     {"test_mode", b.test_mode + 1},
                     {"test_frequency_hz", b.test_frequency_hz},
                     {"model_frequency_hz_before", NumberOrNull(b.model_frequency_hz)},

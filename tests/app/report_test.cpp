@@ -390,7 +390,8 @@ TEST(ReportData, DiagnosisViewFoldsLookAlikesAndTellsTheStory) {
   EXPECT_NE(story["adequacy"].get<std::string>().find("the model still misses something these data can see"),
             std::string::npos);
   ASSERT_EQ(story["failing_modes"].size(), 1u);
-  EXPECT_EQ(story["failing_modes"][0], "synthetic mode 3 (260 Hz): no model mode pairs with it");
+  // Worded as the terminal words it (report::TestModeWords).
+  EXPECT_EQ(story["failing_modes"][0], "mode 3 of synthetic (260 Hz): no model mode pairs with it");
   // Look-alikes: rank 1's reading on 7 other points (the group less rank 1), and the compliance alone.
   ASSERT_EQ(story["lookalikes"].size(), 2u);
   EXPECT_EQ(story["lookalikes"][0]["text"], "rank 1's reading on 7 other points (bearings+points:*)");

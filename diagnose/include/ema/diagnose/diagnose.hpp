@@ -196,7 +196,10 @@ struct ModelError {
 /// One mode of one setup before/after.
 struct ModeComparison {
   std::string setup;
-  int test_mode = -1;   ///< index into that setup's test modes
+  /// Which test (index into Diagnose's `tests`): two tests of one setup — a repeat, a follow-up —
+  /// share a setup's name and its model error (docs/diagnose.md "Model error") but not their modes.
+  int test = 0;
+  int test_mode = -1;   ///< index into that test's modes
   int model_mode = -1;  ///< -1: unpaired
   double test_frequency_hz = kNaN;
   double model_frequency_hz = kNaN;
