@@ -114,6 +114,11 @@ app::PlanStageResult app::RunPlanStage(const PlanConfig& config, const model::Mo
     for (const planning::Separation& s : plan.separations)
       out << "  " << s.a << " vs " << s.b << ": " << FixedPoint(s.sigma_before, 1) << " σ → "
           << FixedPoint(s.sigma_after, 1) << " σ apart\n";
+    if (!plan.separations.empty() && (options.frequency_model_error_rel > 0.0 || options.shape_model_error > 0.0))
+      out << "  (σ: the test's noise and the model's own error the diagnosis inferred combined — "
+          << FixedPoint(100.0 * plan.separation_frequency_sigma_rel, 2) << " % of each frequency, "
+          << FixedPoint(100.0 * plan.separation_shape_sigma, 1)
+          << " % of a shape's rms amplitude at each DOF: what a follow-up test must beat)\n";
   }
   for (const std::string& note : plan.notes) out << "  Note: " << note << ".\n";
   out << "wrote " << config.output << (config.json_path.empty() ? "" : " and " + config.json_path) << "\n";
@@ -121,7 +126,7 @@ app::PlanStageResult app::RunPlanStage(const PlanConfig& config, const model::Mo
 }
 
 int RunPlan(const std::vector<std::string>& args) {
-  const std::optional<app::PlanConfig> config = app::ParsePlanArgs(args);
+  std::optional<app::PlanConfig> config = app::ParsePlanArgs(args);
   if (!config) return 0;
   const model::Model model = formats::ReadModelFile(config->model_path);
   std::vector<planning::Reading> readings;
@@ -130,6 +135,13 @@ int RunPlan(const std::vector<std::string>& args) {
     if (!std::filesystem::exists(config->candidates_path, ec))
       throw InputError(config->candidates_path, "diagnosis file not found; expected the DIAG.json of `ema diagnose --json`");
     readings = formats::LookAlikeReadings(formats::ReadDiagnosisReadings(config->candidates_path), config->candidates_path);
+    // Each reading is a model, off the structure by the model's own error as well as the test's
+    // noise: where the diagnosis found that error dominating, the separations are in both.
+    const diagnose::ModelError error = formats::ReadDiagnosisModelError(config->candidates_path);
+    if (error.dominates) {
+      config->options.frequency_model_error_rel = error.frequency_rel;
+      config->options.shape_model_error = error.shape;
+    }
   }
   std::optional<formats::Plan> keep;
   if (!config->keep_path.empty()) {

@@ -838,15 +838,18 @@ ema::diagnose::SetupModes ToSetupModes(const std::string& setup, const py::objec
 /// The candidate readings of a diagnosis: a DIAG.json path, or the dict ema.diagnose returns (any
 /// mapping in DIAG.json's layout), read by the DIAG.json reader itself through a temporary file so
 /// that it means what the same JSON in a file means to `ema plan --candidates`. *origin: the name
-/// messages give it (the path, or "candidates").
-std::vector<ema::formats::DiagnosisReading> DiagnosisReadingsOf(const py::object& o, std::string* origin) {
+/// messages give it (the path, or "candidates"); *error: the model's own error it inferred.
+std::vector<ema::formats::DiagnosisReading> DiagnosisReadingsOf(const py::object& o, std::string* origin,
+                                                                ema::diagnose::ModelError* error) {
   if (IsPath(o)) {
     const std::string path = PathOf(o);
     std::error_code ec;
     if (!std::filesystem::exists(path, ec))
       throw ema::InputError(path, "diagnosis file not found; expected the DIAG.json of `ema diagnose --json`");
     *origin = path;
-    return ema::formats::ReadDiagnosisReadings(path);
+    auto readings = ema::formats::ReadDiagnosisReadings(path);
+    *error = ema::formats::ReadDiagnosisModelError(path);
+    return readings;
   }
   if (!IsMapping(o))
     throw py::type_error("candidates: expected None, a DIAG.json path or the dict ema.diagnose returns, found " + TypeName(o));
@@ -856,7 +859,9 @@ std::vector<ema::formats::DiagnosisReading> DiagnosisReadingsOf(const py::object
   // working folder.
   const nlohmann::json diagnosis = nlohmann::json::parse(
       JsonText(py::dict(o), "candidates", "the layout of `ema diagnose --json` (what ema.diagnose returns)"));
-  return ema::formats::ReadDiagnosisReadings(diagnosis, "candidates", std::filesystem::current_path());
+  auto readings = ema::formats::ReadDiagnosisReadings(diagnosis, "candidates", std::filesystem::current_path());
+  *error = ema::formats::ReadDiagnosisModelError(diagnosis, "candidates");
+  return readings;
 }
 
 /// None, or the path `o` names; TypeError naming the argument otherwise.
@@ -1655,8 +1660,11 @@ PYBIND11_MODULE(_ema, m) {
         std::vector<ema::planning::Reading> readings;
         std::string candidates_origin;
         if (!candidates.is_none()) {
-          const std::vector<fm::DiagnosisReading> all = DiagnosisReadingsOf(candidates, &candidates_origin);
+          ema::diagnose::ModelError error;
+          const std::vector<fm::DiagnosisReading> all = DiagnosisReadingsOf(candidates, &candidates_origin, &error);
           readings = fm::LookAlikeReadings(all, candidates_origin);
+          // As `ema plan --candidates`: the separations in the noise and the model's own error.
+          if (error.dominates) o.frequency_model_error_rel = error.frequency_rel, o.shape_model_error = error.shape;
         }
         std::optional<fm::Plan> kept;
         if (!keep_path.empty()) {

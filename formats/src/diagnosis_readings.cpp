@@ -35,7 +35,9 @@ class DiagnosisJsonReader {
   DiagnosisJsonReader(std::string origin, std::filesystem::path base_dir)
       : base_dir_(std::move(base_dir)), file_(std::move(origin)) {}
 
-  std::vector<DiagnosisReading> ReadFile(const std::filesystem::path& path) const {
+  std::vector<DiagnosisReading> ReadFile(const std::filesystem::path& path) const { return Read(Parse(path)); }
+
+  nlohmann::json Parse(const std::filesystem::path& path) const {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw InputError(file_, "diagnosis file not found");
     std::ifstream in(path, std::ios::binary);
@@ -50,7 +52,25 @@ class DiagnosisJsonReader {
       throw InputError(file_ + ":" + std::to_string(ReadingLineOf(text, e.byte)),
                        "not valid JSON (" + std::string(e.what()) + "); expected the JSON of `ema diagnose --json`");
     }
-    return Read(root);
+    return root;
+  }
+
+  diagnose::ModelError ModelError(const nlohmann::json& root) const {
+    diagnose::ModelError out;
+    if (!root.is_object() || !root.contains("model_error") || root["model_error"].is_null()) return out;
+    const nlohmann::json& e = root["model_error"];
+    auto number = [&](const char* key) {
+      if (!e.is_object() || !e.contains(key) || !e[key].is_number() || !(e[key].get<double>() >= 0.0))
+        throw InputError(file_, std::string("\"model_error\": expected {\"frequency_rel\", \"shape\", \"dominates\"} with \"") +
+                                    key + "\" a number >= 0, as `ema diagnose --json` writes it");
+      return e[key].get<double>();
+    };
+    out.frequency_rel = number("frequency_rel");
+    out.shape = number("shape");
+    if (e.contains("frequency_common_rel") && e["frequency_common_rel"].is_number())
+      out.frequency_common_rel = e["frequency_common_rel"].get<double>();
+    out.dominates = e.contains("dominates") && e["dominates"].is_boolean() && e["dominates"].get<bool>();
+    return out;
   }
 
   std::vector<DiagnosisReading> Read(const nlohmann::json& root) const {
@@ -149,6 +169,15 @@ class DiagnosisJsonReader {
 
 std::vector<DiagnosisReading> ReadDiagnosisReadings(const std::filesystem::path& path) {
   return DiagnosisJsonReader(path.string(), path.parent_path()).ReadFile(path);
+}
+
+diagnose::ModelError ReadDiagnosisModelError(const std::filesystem::path& path) {
+  const DiagnosisJsonReader reader(path.string(), path.parent_path());
+  return reader.ModelError(reader.Parse(path));
+}
+
+diagnose::ModelError ReadDiagnosisModelError(const nlohmann::json& diagnosis, const std::string& origin) {
+  return DiagnosisJsonReader(origin, {}).ModelError(diagnosis);
 }
 
 std::vector<DiagnosisReading> ReadDiagnosisReadings(const nlohmann::json& diagnosis, const std::string& origin,

@@ -44,6 +44,9 @@ nlohmann::json TestPlanJson(const planning::TestPlan& plan, bool with_separation
     for (const planning::Separation& s : plan.separations)
       out["separations"].push_back({{"a", s.a}, {"b", s.b}, {"sigma_before", NumberOrNull(s.sigma_before)},
                                     {"sigma_after", NumberOrNull(s.sigma_after)}});
+    // The σ they are in: the noise and the model's own error the diagnosis inferred (docs/plan.md).
+    out["separation_sigma"] = {{"frequency_rel", NumberOrNull(plan.separation_frequency_sigma_rel)},
+                               {"shape_dof", NumberOrNull(plan.separation_shape_sigma)}};
   }
   return ValidUtf8(std::move(out));
 }

@@ -32,6 +32,9 @@ bool PlanOptions::IsValid(std::string* why) const {
   else if (!(automac_limit > 0.0 && automac_limit < 1.0)) bad = "automac_limit must be in (0, 1)";
   else if (!(frequency_sigma_rel > 0.0) || !(shape_dof_sigma > 0.0))
     bad = "frequency_sigma_rel and shape_dof_sigma must be > 0";
+  else if (!(frequency_model_error_rel >= 0.0) || !std::isfinite(frequency_model_error_rel) ||
+           !(shape_model_error >= 0.0) || !std::isfinite(shape_model_error))
+    bad = "frequency_model_error_rel and shape_model_error must be >= 0";
   else if (!(sensor_mass_kg >= 0.0) || !std::isfinite(sensor_mass_kg)) bad = "sensor mass (--sensor-mass) must be >= 0 kg";
   else if (impacts < 1) bad = "impacts must be >= 1";
   if (why) *why = bad;
@@ -377,6 +380,10 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
       double xx = 0.0, yy = 0.0, xy = 0.0;
     };
     const auto n_groups = groups.size();
+    // The σ a test result lies off each reading's prediction by: the noise and the model's own
+    // error combined (PlanOptions::frequency_model_error_rel, shape_model_error).
+    const double frequency_sigma = std::hypot(options.frequency_sigma_rel, options.frequency_model_error_rel);
+    const double shape_sigma = std::hypot(options.shape_dof_sigma, options.shape_model_error);
     std::vector<std::pair<size_t, size_t>> pairs;
     for (size_t a = 0; a < n_readings; ++a)
       for (size_t b = a + 1; b < n_readings; ++b) pairs.emplace_back(a, b);
@@ -391,7 +398,7 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
         const Eigen::Index ka = target[j], kb = partner[a * n_readings + b][static_cast<size_t>(j)];
         if (kb < 0 || !excited(j)) continue;
         usable[slot] = 1;
-        const double df = (predicted[a].hz(ka) - predicted[b].hz(kb)) / (options.frequency_sigma_rel * target_hz(j));
+        const double df = (predicted[a].hz(ka) - predicted[b].hz(kb)) / (frequency_sigma * target_hz(j));
         frequency_term[slot] = df * df;
         for (size_t g = 0; g < n_groups; ++g)
           for (int r : groups[g]) {
@@ -436,7 +443,7 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
         const Sums& t = st.sums[slot];
         const double mac = t.xx > 0.0 && t.yy > 0.0 ? t.xy * t.xy / (t.xx * t.yy) : 1.0;
         sum += frequency_term[slot] +
-               static_cast<double>(st.rows) * std::max(0.0, 1.0 - mac) / (options.shape_dof_sigma * options.shape_dof_sigma);
+               static_cast<double>(st.rows) * std::max(0.0, 1.0 - mac) / (shape_sigma * shape_sigma);
       }
       return std::sqrt(sum);
     };
@@ -477,6 +484,7 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
       value = best;
     }
     const State before = state_of(keep.empty() ? for_modes : fixed);
+    plan.separation_frequency_sigma_rel = frequency_sigma, plan.separation_shape_sigma = shape_sigma;
     for (size_t q = 0; q < pairs.size(); ++q)
       plan.separations.push_back({readings[pairs[q].first].label, readings[pairs[q].second].label, separation_of(before, q),
                                   separation_of(current, q)});

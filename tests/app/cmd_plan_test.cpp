@@ -3,6 +3,8 @@
 // --keep extends a plan; bad input names the file and what was expected.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -131,6 +133,34 @@ TEST(PlanCli, CandidatesSeparateMirrorReadingsAndKeepExtendsAPlan) {
   // Before = the kept plan's sensors (the first plan's after), after = with the new set.
   EXPECT_NEAR(plan2["separations"][0]["sigma_before"].get<double>(), s["sigma_after"].get<double>(), 1e-6);
   EXPECT_GT(plan2["separations"][0]["sigma_after"].get<double>(), s["sigma_after"].get<double>());  // more sensors, more to see
+
+  // The diagnosis found the model's own error dominating (0.5 % of each frequency, 5 % of a shape
+  // at each DOF): the readings are models off the structure by that error too, so they lie
+  // closer in σ. The mirror pair's frequencies are equal, its shapes alone part it: the same set,
+  // its separation × 0.1 / √(0.1² + 0.05²) = 0.894 (docs/plan.md).
+  diag["model_error"] = {{"frequency_rel", 0.005}, {"shape", 0.05}, {"frequency_common_rel", 0.001}, {"dominates", true}};
+  std::ofstream(dir / "diag-error.json") << diag.dump(2);
+  ASSERT_EQ(RunEma("plan " + model + " --sensors 6 --candidates " + Quoted(dir / "diag-error.json") + " -o " +
+                       Quoted(dir / "plan-error.toml") + " --json " + Quoted(dir / "plan-error.json"),
+                   dir),
+            0)
+      << Slurp(dir / "stderr.txt");
+  const auto with_error = nlohmann::json::parse(Slurp(dir / "plan-error.json"));
+  EXPECT_EQ(with_error["sets"], plan["sets"]);
+  EXPECT_NEAR(with_error["separations"][0]["sigma_after"].get<double>(),
+              s["sigma_after"].get<double>() * 0.1 / std::hypot(0.1, 0.05), 1e-3 * s["sigma_after"].get<double>());
+  EXPECT_NEAR(with_error["separation_sigma"]["frequency_rel"].get<double>(), std::hypot(0.001, 0.005), 1e-12);
+  EXPECT_NEAR(plan["separation_sigma"]["frequency_rel"].get<double>(), 0.001, 1e-12);  // the noise alone
+  EXPECT_NE(Slurp(dir / "stdout.txt").find("the model's own error the diagnosis inferred"), std::string::npos)
+      << Slurp(dir / "stdout.txt");
+  // Where the error does not dominate the test's σ, the noise alone, as before.
+  diag["model_error"]["dominates"] = false;
+  std::ofstream(dir / "diag-small.json") << diag.dump(2);
+  ASSERT_EQ(RunEma("plan " + model + " --sensors 6 --candidates " + Quoted(dir / "diag-small.json") + " -o " +
+                       Quoted(dir / "plan-small.toml") + " --json " + Quoted(dir / "plan-small.json"),
+                   dir),
+            0);
+  EXPECT_EQ(nlohmann::json::parse(Slurp(dir / "plan-small.json"))["separations"], plan["separations"]);
 }
 
 TEST(PlanCli, BadInputNamesTheFileAndWhatWasExpected) {
@@ -154,6 +184,12 @@ TEST(PlanCli, BadInputNamesTheFileAndWhatWasExpected) {
   const std::string err = Slurp(dir / "stderr.txt");
   EXPECT_NE(err.find("other.json, candidate rank 1"), std::string::npos) << err;
   EXPECT_NE(err.find("expected a diagnosis of this model"), std::string::npos) << err;
+  // A model error that is not numbers.
+  nlohmann::json with_error = diag;
+  with_error["model_error"] = {{"frequency_rel", "large"}, {"shape", 0.1}, {"dominates", true}};
+  std::ofstream(dir / "error.json") << with_error.dump();
+  EXPECT_EQ(RunEma("plan " + model + " --candidates " + Quoted(dir / "error.json") + " -o " + Quoted(dir / "p.toml"), dir), 1);
+  EXPECT_NE(Slurp(dir / "stderr.txt").find("error.json: \"model_error\": expected"), std::string::npos) << Slurp(dir / "stderr.txt");
   // Not a DIAG.json at all.
   std::ofstream(dir / "junk.json") << "{\"modes\": []}";
   EXPECT_EQ(RunEma("plan " + model + " --candidates " + Quoted(dir / "junk.json") + " -o " + Quoted(dir / "p.toml"), dir), 1);

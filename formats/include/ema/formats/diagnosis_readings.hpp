@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "ema/diagnose/diagnose.hpp"
 #include "ema/model/model.hpp"
 
 namespace ema::formats {
@@ -29,6 +30,13 @@ struct DiagnosisReading {
 /// model file's [[effect]] takes it (the parameters factor/value/mass/k; a law that parses).
 /// A law's relative curve `file =` paths resolve against the DIAG.json's folder.
 std::vector<DiagnosisReading> ReadDiagnosisReadings(const std::filesystem::path& path);
+
+/// The model's own error the diagnosis inferred for rank 1 (DIAG.json `model_error`, cli.md "added
+/// turn 4"): all zero when the file has none (`--exact-form`, a file before the field). InputError
+/// naming the file when it is there but not {"frequency_rel", "shape", "dominates"} of numbers ≥ 0.
+diagnose::ModelError ReadDiagnosisModelError(const std::filesystem::path& path);
+/// The same from the JSON itself (`origin` names it in messages).
+diagnose::ModelError ReadDiagnosisModelError(const nlohmann::json& diagnosis, const std::string& origin);
 
 /// The same from the JSON itself (what `ema.diagnose` returns, in Python): `origin` names it in
 /// messages, and a law's relative curve files resolve against `base_dir`.

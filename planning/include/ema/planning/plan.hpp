@@ -37,6 +37,13 @@ struct PlanOptions {
   /// 1σ of a shape at one DOF relative to the shape's rms amplitude over the set's DOFs.
   double frequency_sigma_rel = 1e-3;
   double shape_dof_sigma = 0.1;
+  /// The model's own error the diagnosis inferred (DIAG.json `model_error` of rank 1, where it
+  /// dominates the test's σ): each reading is a model, and a test result lies from any model by
+  /// the model's error as well as by the noise, so the separations are measured in both combined
+  /// — √(σ_f² + ε_f²) of a frequency, √(σ_s² + ε_s²) of a shape per DOF in the units above
+  /// (docs/plan.md). 0: the noise alone (a model taken as exact, or no diagnosis).
+  double frequency_model_error_rel = 0.0;
+  double shape_model_error = 0.0;
   double sensor_mass_kg = 0.0;  ///< per sensor point, written to the plan (the simulator mounts it)
   int impacts = 5;              ///< impacts per reference and set (averages of H1 and coherence)
 
@@ -84,6 +91,9 @@ struct TestPlan {
   int impacts = 0;
   double sensor_mass_kg = 0.0;
   std::vector<Separation> separations;       ///< per pair of readings (with readings only)
+  /// The 1σ the separations are in: of a frequency (a share of f) and of a shape per DOF (a share
+  /// of its rms amplitude) — the noise and the model's own error combined (PlanOptions).
+  double separation_frequency_sigma_rel = 0.0, separation_shape_sigma = 0.0;
   std::vector<std::string> notes;            ///< what the plan could not satisfy, in words
 
   std::vector<Dof> Sensors() const;          ///< every set's DOFs, in order
