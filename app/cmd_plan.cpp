@@ -114,7 +114,7 @@ app::PlanStageResult app::RunPlanStage(const PlanConfig& config, const model::Mo
     for (const planning::Separation& s : plan.separations)
       out << "  " << s.a << " vs " << s.b << ": " << FixedPoint(s.sigma_before, 1) << " σ → "
           << FixedPoint(s.sigma_after, 1) << " σ apart\n";
-    if (!plan.separations.empty() && (options.frequency_model_error_rel > 0.0 || options.shape_model_error > 0.0))
+    if (!plan.separations.empty() && plan.separations_include_model_error)
       out << "  (σ: the test's noise and the model's own error the diagnosis inferred combined — "
           << FixedPoint(100.0 * plan.separation_frequency_sigma_rel, 2) << " % of each frequency, "
           << FixedPoint(100.0 * plan.separation_shape_sigma, 1)

@@ -305,7 +305,10 @@ std::string RunSummary(const pipeline::RunResult& run, const nlohmann::json& his
       if (sep.sigma_before < before) before = sep.sigma_before, after = sep.sigma_after;
     lines.push_back("  Next test to tell them apart: one more roving set at " + dofs + " beside " +
                     project.tests[static_cast<std::size_t>(next.test)].name + "'s " + std::to_string(next.kept_sets) +
-                    (std::isfinite(before) ? " — the closest pair from " + Fixed(before, 1) + " σ to " + Fixed(after, 1) + " σ apart"
+                    (std::isfinite(before) ? " — the closest pair from " + Fixed(before, 1) + " σ to " + Fixed(after, 1) + " σ apart" +
+                                                 (next.plan.separations_include_model_error
+                                                      ? " in the test's noise and the model's own error"
+                                                      : "")
                                            : std::string()) +
                     " (ema plan --candidates; the report draws it).");
   } else if (!run.next_test_error.empty()) {

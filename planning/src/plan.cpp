@@ -485,6 +485,7 @@ TestPlan PlanTest(const model::Model& input, const PlanOptions& options, const s
     }
     const State before = state_of(keep.empty() ? for_modes : fixed);
     plan.separation_frequency_sigma_rel = frequency_sigma, plan.separation_shape_sigma = shape_sigma;
+    plan.separations_include_model_error = options.frequency_model_error_rel > 0.0 || options.shape_model_error > 0.0;
     for (size_t q = 0; q < pairs.size(); ++q)
       plan.separations.push_back({readings[pairs[q].first].label, readings[pairs[q].second].label, separation_of(before, q),
                                   separation_of(current, q)});

@@ -94,6 +94,7 @@ struct TestPlan {
   /// The 1σ the separations are in: of a frequency (a share of f) and of a shape per DOF (a share
   /// of its rms amplitude) — the noise and the model's own error combined (PlanOptions).
   double separation_frequency_sigma_rel = 0.0, separation_shape_sigma = 0.0;
+  bool separations_include_model_error = false;  ///< PlanOptions gave a model error (> 0)
   std::vector<std::string> notes;            ///< what the plan could not satisfy, in words
 
   std::vector<Dof> Sensors() const;          ///< every set's DOFs, in order
