@@ -75,7 +75,10 @@ std::string HonestPercent(const pipeline::Findings& f) {
 // (rank 1's evidence per test mode), and which kinds of missing physics fit such a pattern.
 void InadequateModelWords(const diagnose::Diagnosis& d, const pipeline::Findings& f, std::ostringstream* out) {
   const diagnose::ModelError& error = f.model_error;
-  *out << "The model is NOT adequate to this test, with or without the effects it can try: its own error (about "
+  bool several_tests = false;
+  for (const diagnose::ModeComparison& m : d.candidates.front().modes) several_tests = several_tests || m.test > 0;
+  *out << "The model is NOT adequate to " << (several_tests ? "these tests" : "this test")
+       << ", with or without the effects it can try: its own error (about "
        << Number(100.0 * error.frequency_rel, 2) << " % of each frequency";
   if (error.frequency_common_rel >= error.frequency_rel)
     *out << " and " << Number(100.0 * error.frequency_common_rel, 2) << " % shared by all of them";

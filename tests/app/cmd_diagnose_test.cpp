@@ -123,6 +123,7 @@ TEST(DiagnoseWords, TwoTestsOfOneSetupShareTheModelErrorAndAreToldApart) {
       << test::Slurp(dir / "stderr.txt");
   const std::string said = test::Slurp(dir / "stdout.txt");
   EXPECT_NE(said.find(" of test 2 ("), std::string::npos) << said;
+  EXPECT_EQ(said.rfind("The model is NOT adequate to these tests", 0), 0u) << said;
   EXPECT_NE(said.find("| nominal, test 2 |"), std::string::npos) << said;
   const nlohmann::json one = nlohmann::json::parse(test::Slurp(dir / "one.json"));
   const nlohmann::json two = nlohmann::json::parse(test::Slurp(dir / "two.json"));
