@@ -17,6 +17,7 @@
 #include "ema/formats/model_file.hpp"
 #include "ema/formats/plan_file.hpp"
 #include "ema/formats/plan_json.hpp"
+#include "ema/pipeline/run.hpp"
 #include "stages.hpp"
 
 namespace ema {
@@ -134,14 +135,11 @@ int RunPlan(const std::vector<std::string>& args) {
     std::error_code ec;
     if (!std::filesystem::exists(config->candidates_path, ec))
       throw InputError(config->candidates_path, "diagnosis file not found; expected the DIAG.json of `ema diagnose --json`");
-    readings = formats::LookAlikeReadings(formats::ReadDiagnosisReadings(config->candidates_path), config->candidates_path);
-    // Each reading is a model, off the structure by the model's own error as well as the test's
-    // noise: where the diagnosis found that error dominating, the separations are in both.
-    const diagnose::ModelError error = formats::ReadDiagnosisModelError(config->candidates_path);
-    if (error.dominates) {
-      config->options.frequency_model_error_rel = error.frequency_rel;
-      config->options.shape_model_error = error.shape;
-    }
+    const std::filesystem::path path = config->candidates_path;
+    const nlohmann::json diagnosis = formats::ReadDiagnosisJson(path);
+    readings = formats::LookAlikeReadings(formats::ReadDiagnosisReadings(diagnosis, path.string(), path.parent_path()),
+                                          config->candidates_path);
+    pipeline::SeparateInModelError(formats::ReadDiagnosisModelError(diagnosis, path.string()), &config->options);
   }
   std::optional<formats::Plan> keep;
   if (!config->keep_path.empty()) {

@@ -835,33 +835,27 @@ ema::diagnose::SetupModes ToSetupModes(const std::string& setup, const py::objec
 // ------------------------------------------------------------------------------------------------
 // Test planning (`ema plan`, docs/plan.md).
 
-/// The candidate readings of a diagnosis: a DIAG.json path, or the dict ema.diagnose returns (any
-/// mapping in DIAG.json's layout), read by the DIAG.json reader itself through a temporary file so
-/// that it means what the same JSON in a file means to `ema plan --candidates`. *origin: the name
-/// messages give it (the path, or "candidates"); *error: the model's own error it inferred.
-std::vector<ema::formats::DiagnosisReading> DiagnosisReadingsOf(const py::object& o, std::string* origin,
-                                                                ema::diagnose::ModelError* error) {
+/// A diagnosis as JSON: a DIAG.json path (read once), or the dict ema.diagnose returns (any mapping
+/// in DIAG.json's layout) — then read by the DIAG.json readers themselves, so that it means what
+/// the same JSON in a file means to `ema plan --candidates`. *origin: the name messages give it
+/// (the path, or "candidates"); *base_dir: where a law's relative curve files resolve (the file's
+/// folder, or the working folder).
+nlohmann::json DiagnosisJsonOf(const py::object& o, std::string* origin, std::filesystem::path* base_dir) {
   if (IsPath(o)) {
     const std::string path = PathOf(o);
     std::error_code ec;
     if (!std::filesystem::exists(path, ec))
       throw ema::InputError(path, "diagnosis file not found; expected the DIAG.json of `ema diagnose --json`");
     *origin = path;
-    auto readings = ema::formats::ReadDiagnosisReadings(path);
-    *error = ema::formats::ReadDiagnosisModelError(path);
-    return readings;
+    *base_dir = std::filesystem::path(path).parent_path();
+    return ema::formats::ReadDiagnosisJson(path);
   }
   if (!IsMapping(o))
     throw py::type_error("candidates: expected None, a DIAG.json path or the dict ema.diagnose returns, found " + TypeName(o));
   *origin = "candidates";
-  // Read by the DIAG.json reader itself, from the JSON, so that it means what the same JSON in a
-  // file means to `ema plan --candidates`; a law's relative curve files resolve against the
-  // working folder.
-  const nlohmann::json diagnosis = nlohmann::json::parse(
+  *base_dir = std::filesystem::current_path();
+  return nlohmann::json::parse(
       JsonText(py::dict(o), "candidates", "the layout of `ema diagnose --json` (what ema.diagnose returns)"));
-  auto readings = ema::formats::ReadDiagnosisReadings(diagnosis, "candidates", std::filesystem::current_path());
-  *error = ema::formats::ReadDiagnosisModelError(diagnosis, "candidates");
-  return readings;
 }
 
 /// None, or the path `o` names; TypeError naming the argument otherwise.
@@ -1660,11 +1654,11 @@ PYBIND11_MODULE(_ema, m) {
         std::vector<ema::planning::Reading> readings;
         std::string candidates_origin;
         if (!candidates.is_none()) {
-          ema::diagnose::ModelError error;
-          const std::vector<fm::DiagnosisReading> all = DiagnosisReadingsOf(candidates, &candidates_origin, &error);
-          readings = fm::LookAlikeReadings(all, candidates_origin);
+          std::filesystem::path base_dir;
+          const nlohmann::json diagnosis = DiagnosisJsonOf(candidates, &candidates_origin, &base_dir);
+          readings = fm::LookAlikeReadings(fm::ReadDiagnosisReadings(diagnosis, candidates_origin, base_dir), candidates_origin);
           // As `ema plan --candidates`: the separations in the noise and the model's own error.
-          if (error.dominates) o.frequency_model_error_rel = error.frequency_rel, o.shape_model_error = error.shape;
+          ema::pipeline::SeparateInModelError(fm::ReadDiagnosisModelError(diagnosis, candidates_origin), &o);
         }
         std::optional<fm::Plan> kept;
         if (!keep_path.empty()) {

@@ -246,9 +246,7 @@ json DiagnosisView(const pipeline::DiagnoseStage& stage) {
   // ---- evidence per test mode: as given (before) and with rank 1 (after), in σ of the test ----
   json modes = json::array();
   json failing = json::array();
-  std::vector<diagnose::ModeComparison> as_given;
-  for (const pipeline::ModeEvidence& m : f.modes) as_given.push_back(m.before);
-  const bool several = SeveralTestsOfOneSetup(as_given);
+  const bool several = SeveralTestsOfOneSetup(stage.diagnosis.baseline.modes);  // f.modes' `before`
   for (const pipeline::ModeEvidence& m : f.modes) {
     const diagnose::ModeComparison &b = m.before, &a = m.after;
     json row = {{"setup", b.setup},

@@ -357,33 +357,35 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
   };
   // A group of test modes (one model mode seen by several tests of one setup) has one shape
   // error: one ε_s marginalised for the group, and its rows at one test DOF whitened together.
+  // Per group, its shape rows by test DOF (a row without one — (1 − MAC) — or of a lone mode alone).
+  std::vector<std::vector<std::vector<int>>> shape_rows(groups.size());
   const std::vector<long long>& row_dof = problem->Eval().RowDof();
+  for (size_t g = 0; g < groups.size(); ++g) {
+    std::map<long long, size_t> at_dof;
+    for (int m : groups[g])
+      for (int row = blocks[m] + 1; row < blocks[m + 1]; ++row) {
+        const long long dof = row_dof[static_cast<size_t>(row)];
+        if (dof < 0 || groups[g].size() == 1) {
+          shape_rows[g].push_back({row});
+          continue;
+        }
+        const auto [it, added] = at_dof.try_emplace(dof, shape_rows[g].size());
+        if (added) shape_rows[g].emplace_back();
+        shape_rows[g][it->second].push_back(row);
+      }
+  }
   auto shapes_at = [&](const std::vector<double>& grid) {
     Shapes out;
     out.jwj = Eigen::MatrixXd::Zero(k, k);
     out.most_probable = Eigen::VectorXd::Zero(modes);
-    for (const std::vector<int>& group : groups) {
-      // The group's shape rows by test DOF (a row without one — (1 − MAC) — alone).
-      std::vector<std::vector<int>> by_dof;
-      std::map<long long, size_t> at_dof;
-      for (int m : group)
-        for (int row = blocks[m] + 1; row < blocks[m + 1]; ++row) {
-          const long long dof = row_dof[static_cast<size_t>(row)];
-          if (dof < 0 || group.size() == 1) {
-            by_dof.push_back({row});
-            continue;
-          }
-          const auto [it, added] = at_dof.try_emplace(dof, by_dof.size());
-          if (added) by_dof.emplace_back();
-          by_dof[it->second].push_back(row);
-        }
+    for (size_t g = 0; g < groups.size(); ++g) {
       double best = -kInf, sum = 0.0, best_e = 0.0;
       std::vector<double> values;
-      Eigen::MatrixXd best_jac;
+      Eigen::MatrixXd best_jwj = Eigen::MatrixXd::Zero(k, k);
       for (double e : grid.empty() ? std::vector<double>{0.0} : grid) {
         double value = 0.0;
-        std::vector<Eigen::MatrixXd> jac_rows;
-        for (const std::vector<int>& rows : by_dof) {
+        Eigen::MatrixXd jwj = Eigen::MatrixXd::Zero(k, k);
+        for (const std::vector<int>& rows : shape_rows[g]) {
           const int n_rows = static_cast<int>(rows.size());
           Eigen::VectorXd v(n_rows);
           Eigen::MatrixXd x(n_rows, 1 + k);
@@ -393,22 +395,15 @@ Fit Assess(Problem* problem, const std::vector<int>& set, const std::vector<doub
             x.row(i).tail(k) = jac.row(rows[i]);
           }
           value += WhitenShared(v, &x) - 0.5 * x.col(0).squaredNorm();
-          jac_rows.push_back(x.rightCols(k));
+          jwj += x.rightCols(k).transpose() * x.rightCols(k);
         }
         values.push_back(value);
-        if (value > best) {
-          best = value, best_e = e;
-          best_jac.resize(0, k);
-          for (const Eigen::MatrixXd& j : jac_rows) {
-            best_jac.conservativeResize(best_jac.rows() + j.rows(), k);
-            best_jac.bottomRows(j.rows()) = j;
-          }
-        }
+        if (value > best) best = value, best_e = e, best_jwj = jwj;
       }
       for (double v : values) sum += std::exp(v - best);
       out.log_likelihood += best + std::log(sum / static_cast<double>(values.size()));
-      for (int m : group) out.most_probable(m) = best_e;
-      if (k > 0 && ok && best_jac.rows() > 0) out.jwj += best_jac.transpose() * best_jac;
+      for (int m : groups[g]) out.most_probable(m) = best_e;
+      if (k > 0 && ok) out.jwj += best_jwj;
     }
     return out;
   };

@@ -35,8 +35,6 @@ class DiagnosisJsonReader {
   DiagnosisJsonReader(std::string origin, std::filesystem::path base_dir)
       : base_dir_(std::move(base_dir)), file_(std::move(origin)) {}
 
-  std::vector<DiagnosisReading> ReadFile(const std::filesystem::path& path) const { return Read(Parse(path)); }
-
   nlohmann::json Parse(const std::filesystem::path& path) const {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw InputError(file_, "diagnosis file not found");
@@ -167,13 +165,12 @@ class DiagnosisJsonReader {
 
 }  // namespace
 
-std::vector<DiagnosisReading> ReadDiagnosisReadings(const std::filesystem::path& path) {
-  return DiagnosisJsonReader(path.string(), path.parent_path()).ReadFile(path);
+nlohmann::json ReadDiagnosisJson(const std::filesystem::path& path) {
+  return DiagnosisJsonReader(path.string(), path.parent_path()).Parse(path);
 }
 
-diagnose::ModelError ReadDiagnosisModelError(const std::filesystem::path& path) {
-  const DiagnosisJsonReader reader(path.string(), path.parent_path());
-  return reader.ModelError(reader.Parse(path));
+std::vector<DiagnosisReading> ReadDiagnosisReadings(const std::filesystem::path& path) {
+  return ReadDiagnosisReadings(ReadDiagnosisJson(path), path.string(), path.parent_path());
 }
 
 diagnose::ModelError ReadDiagnosisModelError(const nlohmann::json& diagnosis, const std::string& origin) {

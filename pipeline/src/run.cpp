@@ -109,6 +109,12 @@ std::vector<planning::Reading> LookAlikeReadings(const diagnose::Diagnosis& d, s
 
 }  // namespace
 
+void SeparateInModelError(const diagnose::ModelError& error, planning::PlanOptions* options) {
+  if (!error.dominates) return;
+  options->frequency_model_error_rel = error.frequency_rel;
+  options->shape_model_error = error.shape;
+}
+
 std::optional<NextTest> PlanNextTest(const model::Model& model, const formats::Project& project,
                                      const std::vector<TestResult>& tests, const diagnose::Diagnosis& diagnosis) {
   const std::vector<planning::Reading> readings = LookAlikeReadings(diagnosis, 10);
@@ -138,11 +144,7 @@ std::optional<NextTest> PlanNextTest(const model::Model& model, const formats::P
     options.band_lo_hz = project.fit.data.band_lo_hz;
     options.band_hi_hz = project.fit.data.band_hi_hz;
   }
-  // The readings are models, off the structure by the model's own error too (docs/plan.md).
-  if (const diagnose::ModelError& error = diagnosis.candidates.front().model_error; error.dominates) {
-    options.frequency_model_error_rel = error.frequency_rel;
-    options.shape_model_error = error.shape;
-  }
+  SeparateInModelError(diagnosis.candidates.front().model_error, &options);
   for (const planning::Reading& r : readings) next.readings.push_back(r.label);
   next.kept_sets = static_cast<int>(sets.size());
   next.plan = planning::PlanTest(model, options, readings, sets, frfs.references);

@@ -31,11 +31,13 @@ struct DiagnosisReading {
 /// A law's relative curve `file =` paths resolve against the DIAG.json's folder.
 std::vector<DiagnosisReading> ReadDiagnosisReadings(const std::filesystem::path& path);
 
+/// A DIAG.json's JSON, read once for both readers below: InputError naming the file (and the line)
+/// when it is missing or not JSON.
+nlohmann::json ReadDiagnosisJson(const std::filesystem::path& path);
+
 /// The model's own error the diagnosis inferred for rank 1 (DIAG.json `model_error`, cli.md "added
-/// turn 4"): all zero when the file has none (`--exact-form`, a file before the field). InputError
-/// naming the file when it is there but not {"frequency_rel", "shape", "dominates"} of numbers ≥ 0.
-diagnose::ModelError ReadDiagnosisModelError(const std::filesystem::path& path);
-/// The same from the JSON itself (`origin` names it in messages).
+/// turn 4"): all zero when it has none (`--exact-form`, a file before the field). InputError naming
+/// `origin` when it is there but not {"frequency_rel", "shape", "dominates"} of numbers ≥ 0.
 diagnose::ModelError ReadDiagnosisModelError(const nlohmann::json& diagnosis, const std::string& origin);
 
 /// The same from the JSON itself (what `ema.diagnose` returns, in Python): `origin` names it in

@@ -141,6 +141,12 @@ struct RunResult {
 /// Python's Ctrl-C); a failing step is recorded, never thrown.
 RunResult Run(const RunPlan& plan, const ProgressCallback& progress = {});
 
+/// Each reading of a diagnosis is a model, off the structure by the model's own error as well as
+/// the test's noise: where the diagnosis found that error dominating (`error.dominates`, rank 1's),
+/// the plan measures separations in both (PlanOptions::frequency_model_error_rel,
+/// shape_model_error; docs/plan.md); otherwise `options` stays as it is.
+void SeparateInModelError(const diagnose::ModelError& error, planning::PlanOptions* options);
+
 /// The test that tells rank 1's look-alikes apart (Run calls it after the diagnosis): rank 1 and
 /// the candidates diagnose::IsLookAlike keeps (at most 10), separated by one more roving set beside
 /// the first test with modes — its own sets and references kept, the new set as large as its
